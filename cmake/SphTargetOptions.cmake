@@ -1,0 +1,13 @@
+# One helper sets warnings, precision and sanitizers on every project target.
+function(sph_target_options target)
+  target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic -Wno-unused-parameter)
+  if(SPH_DOUBLE)
+    target_compile_definitions(${target} PUBLIC SPH_DOUBLE=1)
+  endif()
+  if(SPH_SANITIZE)
+    string(REPLACE ";" "," _san "${SPH_SANITIZE}")
+    target_compile_options(${target} PUBLIC -fsanitize=${_san} -fno-omit-frame-pointer -g)
+    target_link_options(${target} PUBLIC -fsanitize=${_san})
+    target_compile_definitions(${target} PUBLIC SPH_ENABLE_ASSERTS=1)
+  endif()
+endfunction()

@@ -1,0 +1,129 @@
+#pragma once
+/// @file component_store.hpp
+/// @brief One contiguous column per particle attribute; a method registers only the columns it
+/// needs, and one permutation (the z-order sort) is applied to every registered column.
+#include <cstddef>
+#include <map>
+#include <memory>
+#include <span>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <typeinfo>
+#include <vector>
+
+#include "engine/types.hpp"
+
+namespace sph {
+
+/// @brief Typed name of a column. Components are declared once (engine/components.hpp) and
+/// looked up by name, so a typo is a compile error rather than a silent new column.
+template <class T>
+struct Component {
+    std::string_view name;
+    using value_type = T;
+};
+
+/// @brief Type-erased column so the store can resize and permute without knowing T.
+class ColumnBase {
+public:
+    virtual ~ColumnBase() = default;
+    virtual void resize(std::size_t n) = 0;
+    /// new[i] = old[perm[i]]
+    virtual void permute(std::span<const Index> perm) = 0;
+    virtual std::size_t bytes() const = 0;
+    virtual const std::type_info& type() const = 0;
+};
+
+/// @brief The value new column entries get: zero (Eigen's default constructor leaves
+/// vectors uninitialised, so they are zeroed explicitly).
+template <class T>
+T zero_value() {
+    if constexpr (requires { T::Zero(); })
+        return T::Zero();
+    else
+        return T{};
+}
+
+template <class T>
+class Column final : public ColumnBase {
+public:
+    std::vector<T> data;
+    void resize(std::size_t n) override { data.resize(n, zero_value<T>()); }
+    void permute(std::span<const Index> perm) override {
+        m_scratch.resize(data.size());
+        for (std::size_t i = 0; i < perm.size(); ++i) m_scratch[i] = data[perm[i]];
+        data.swap(m_scratch);
+    }
+    std::size_t bytes() const override { return data.capacity() * sizeof(T); }
+    const std::type_info& type() const override { return typeid(T); }
+
+private:
+    std::vector<T> m_scratch;
+};
+
+/// @brief The columns of one particle set (fluid or boundary).
+class ComponentStore {
+public:
+    /// @brief Registers a column (idempotent) sized to the current particle count.
+    template <class T>
+    std::span<T> add(Component<T> c) {
+        auto it = m_columns.find(c.name);
+        if (it == m_columns.end()) {
+            auto col = std::make_unique<Column<T>>();
+            col->resize(m_size);
+            it = m_columns.emplace(std::string(c.name), std::move(col)).first;
+        }
+        return column<T>(c.name, *it->second).data;
+    }
+
+    template <class T>
+    std::span<T> get(Component<T> c) {
+        return column<T>(c.name, find(c.name)).data;
+    }
+    template <class T>
+    std::span<const T> get(Component<T> c) const {
+        return column<T>(c.name, const_cast<ComponentStore*>(this)->find(c.name)).data;
+    }
+
+    bool has(std::string_view name) const { return m_columns.find(name) != m_columns.end(); }
+    std::size_t size() const { return m_size; }
+    /// @brief Resizes every column; new entries are value-initialised.
+    void resize(std::size_t n) {
+        m_size = n;
+        for (auto& [name, col] : m_columns) col->resize(n);
+    }
+    /// @brief Applies one permutation to every registered column (new[i] = old[perm[i]]).
+    /// Columns are independent, so they are permuted in parallel.
+    void permute(std::span<const Index> perm);
+    /// @brief Bytes held by all columns.
+    std::size_t bytes() const {
+        std::size_t b = 0;
+        for (const auto& [name, col] : m_columns) b += col->bytes();
+        return b;
+    }
+    std::vector<std::string> names() const {
+        std::vector<std::string> out;
+        for (const auto& [name, col] : m_columns) out.push_back(name);
+        return out;
+    }
+
+private:
+    ColumnBase& find(std::string_view name) {
+        auto it = m_columns.find(name);
+        if (it == m_columns.end())
+            throw std::logic_error("component '" + std::string(name) + "' is not registered");
+        return *it->second;
+    }
+    template <class T>
+    static Column<T>& column(std::string_view name, ColumnBase& base) {
+        if (base.type() != typeid(T))
+            throw std::logic_error("component '" + std::string(name) + "' has another type");
+        return static_cast<Column<T>&>(base);
+    }
+
+    std::map<std::string, std::unique_ptr<ColumnBase>, std::less<>> m_columns;
+    std::size_t m_size = 0;
+};
+
+}  // namespace sph

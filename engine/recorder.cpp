@@ -1,0 +1,94 @@
+#include "engine/recorder.hpp"
+
+#include <cstdio>
+#include <iomanip>
+#include <sstream>
+
+#include "engine/io.hpp"
+
+namespace sph {
+
+Recorder::Recorder(std::filesystem::path dir, const Simulation& sim) : m_dir(std::move(dir)) {
+    std::filesystem::create_directories(m_dir);
+    std::ostringstream h;
+    h << "step,t,dt,updated,neighbours_per_particle,rho_err_avg,rho_err_max,v_max,a_max,wall_s";
+    for (const auto& s : sim.graph().systems()) h << ",ms_" << s->name();
+    h << '\n';
+    m_csv = h.str();
+    m_t0 = std::chrono::steady_clock::now();
+}
+
+void Recorder::begin(const Simulation& sim) {
+    if (sim.world().scene.simulation.frame_rate > 0) write_frame(sim);
+}
+
+void Recorder::write_frame(const Simulation& sim) {
+    char name[32];
+    std::snprintf(name, sizeof name, "frame_%05zu.vtu", m_frame);
+    write_vtu(m_dir / "frames" / name, sim.world(), sim.world().scene.output.attributes);
+    ++m_frame;
+    m_next_frame_time = double(m_frame) / sim.world().scene.simulation.frame_rate;
+    flush_stats();
+}
+
+void Recorder::after_step(const Simulation& sim) {
+    const World& w = sim.world();
+    const StepState& s = w.step;
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - m_t0).count();
+    std::ostringstream row;
+    row << std::setprecision(9) << (s.step - 1) << ',' << s.t - s.dt << ',' << s.dt << ',' << s.updated << ','
+        << (s.updated ? double(s.neighbour_pairs) / double(s.updated) : 0.0) << ',' << s.rho_err_avg << ','
+        << s.rho_err_max << ',' << s.v_max << ',' << s.a_max << ',' << wall;
+    const auto& g = sim.graph();
+    row << std::setprecision(4);
+    for (std::size_t i = 0; i < g.systems().size(); ++i) row << ',' << g.last_seconds(i) * 1e3;
+    row << '\n';
+    m_csv += row.str();
+    const double rate = w.scene.simulation.frame_rate;
+    if (rate > 0 && s.t >= m_next_frame_time - 1e-9) write_frame(sim);
+}
+
+void Recorder::flush_stats() { write_file_atomic(m_dir / "stats.csv", m_csv); }
+
+nlohmann::json Recorder::finish(const Simulation& sim, double wall_seconds, int threads) {
+    flush_stats();
+    const World& w = sim.world();
+    const auto& g = sim.graph();
+    nlohmann::json j;
+    j["scene"] = w.scene.name;
+    j["method"] = to_string(w.scene.simulation.method);
+    j["stepping"] = to_string(w.scene.simulation.stepping.mode);
+    j["fluid_particles"] = w.fluid.size();
+    j["boundary_particles"] = w.boundary.size();
+    j["simulated_time_s"] = sim.time();
+    j["steps"] = sim.steps();
+    j["wall_time_s"] = wall_seconds;
+    j["threads"] = threads;
+    const double fps = wall_seconds > 0 ? double(w.fluid.size()) * double(sim.steps()) / wall_seconds : 0.0;
+    j["fluid_particle_steps_per_s"] = fps;
+    j["avg_dt_s"] = sim.steps() ? sim.time() / double(sim.steps()) : 0.0;
+    j["peak_memory_bytes"] = peak_memory_bytes();
+    const std::size_t bytes = sim.particle_bytes();
+    j["particle_data_bytes"] = bytes;
+    j["bytes_per_fluid_particle"] = w.fluid.size() ? double(bytes) / double(w.fluid.size()) : 0.0;
+    j["peak_memory_per_fluid_particle"] = w.fluid.size() ? double(peak_memory_bytes()) / double(w.fluid.size()) : 0.0;
+    j["physics"] = {{"particle_radius", w.physics.particle_radius},
+                    {"support_radius", w.physics.h},
+                    {"mass", w.physics.mass},
+                    {"speed_of_sound", w.physics.speed_of_sound},
+                    {"fluid_height", w.physics.fluid_height}};
+    j["frames"] = m_frame;
+    double total = 0;
+    for (std::size_t i = 0; i < g.systems().size(); ++i) total += g.total_seconds(i);
+    nlohmann::json systems = nlohmann::json::array();
+    for (std::size_t i = 0; i < g.systems().size(); ++i)
+        systems.push_back({{"name", g.systems()[i]->name()},
+                           {"seconds", g.total_seconds(i)},
+                           {"share", total > 0 ? g.total_seconds(i) / total : 0.0}});
+    j["systems"] = systems;
+    j["systems_total_s"] = total;
+    write_file_atomic(m_dir / "summary.json", j.dump(2) + "\n");
+    return j;
+}
+
+}  // namespace sph

@@ -1,0 +1,133 @@
+#pragma once
+/// @file scene.hpp
+/// @brief A validated scene: what to simulate, how, and what to write. Loaded from strict JSON
+/// (see scenes/README.md for the format, with units) or built in code.
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "engine/types.hpp"
+
+namespace sph {
+
+/// @brief Axis-aligned box in metres.
+struct Aabb {
+    Vec3d min{0, 0, 0};
+    Vec3d max{0, 0, 0};
+    Vec3d extent() const { return max - min; }
+    bool contains(const Vec3d& p) const {
+        return (p.array() >= min.array()).all() && (p.array() <= max.array()).all();
+    }
+};
+
+enum class Method { Wcsph };
+enum class SteppingMode { Constant, Global };
+
+/// @brief Names as written in scene files and on the command line.
+const char* to_string(Method m);
+const char* to_string(SteppingMode m);
+
+/// @brief Time-step control (He et al. eq. 6-8 for `global`).
+struct SteppingParams {
+    SteppingMode mode = SteppingMode::Global;
+    double dt = 4e-4;          ///< s; the step of `constant`, and the first step of `global`.
+    double lambda_v = 0.1;     ///< He eq. 6 CFL coefficient.
+    double lambda_f = 0.05;    ///< He eq. 7 force coefficient.
+    bool acoustic = true;      ///< Also apply dt <= lambda_c h / (c_s + v_max).
+    double lambda_c = 0.4;     ///< Acoustic (sound-speed CFL) coefficient.
+    double dt_max = 5e-3;      ///< s; upper bound on any step.
+    double dt_min = 1e-7;      ///< s; a step below this stops the run with a diagnosis.
+};
+
+struct SimulationParams {
+    Method method = Method::Wcsph;
+    SteppingParams stepping;
+    double end_time = 1.0;       ///< s, simulated.
+    double frame_rate = 30.0;    ///< frames per simulated second; 0 writes no frames.
+    double scale = 1.0;          ///< particle-count multiplier: radius /= cbrt(scale).
+    Vec3d gravity{0.0, -9.81, 0.0};  ///< m/s^2
+    int sort_interval = 16;      ///< steps between z-order re-sorts of the particle columns.
+};
+
+struct FluidParams {
+    double rest_density = 1000.0;     ///< kg/m^3
+    double particle_radius = 0.01;    ///< m, before `scale`; spacing is 2 r, support h = 4 r.
+    double viscosity = 0.02;          ///< Monaghan artificial viscosity alpha (dimensionless).
+    std::optional<double> speed_of_sound;  ///< m/s; default from density_fluctuation.
+    double density_fluctuation = 0.01;     ///< target |rho/rho0 - 1| for the default c_s.
+};
+
+/// @brief A block of fluid particles on a cubic lattice of spacing 2 r, filling [min, max].
+struct FluidBlock {
+    Aabb box;
+    Vec3d velocity{0, 0, 0};  ///< m/s, initial.
+};
+
+enum class BoundaryShape { Container, Box, Sphere };
+const char* to_string(BoundaryShape s);
+
+/// @brief A static rigid boundary sampled with particles (Akinci et al. 2012).
+/// `container`: the inside of a box holds the fluid (its six walls are sampled);
+/// `box`: a solid obstacle; `sphere`: a solid ball.
+struct BoundaryDesc {
+    BoundaryShape shape = BoundaryShape::Container;
+    Aabb box;                 ///< container, box
+    Vec3d center{0, 0, 0};    ///< sphere
+    double radius = 0.0;      ///< sphere, m
+};
+
+enum class FrameFormat { Vtu };
+
+struct OutputParams {
+    FrameFormat format = FrameFormat::Vtu;
+    /// Particle attributes written per frame: position always; any of
+    /// "velocity", "density", "pressure", "acceleration".
+    std::vector<std::string> attributes{"velocity", "density", "pressure"};
+};
+
+/// @brief Particles per axis when a box is filled on a cubic lattice of the given spacing:
+/// particle k sits at min + spacing/2 + k*spacing and n = floor(extent/spacing + 1e-6).
+inline Eigen::Vector3i lattice_dims(const Aabb& box, double spacing) {
+    Eigen::Vector3i n;
+    for (int a = 0; a < 3; ++a) {
+        const double cells = (box.max[a] - box.min[a]) / spacing + 1e-6;
+        n[a] = cells > 0 ? static_cast<int>(cells) : 0;
+    }
+    return n;
+}
+
+/// @brief A complete, validated scene.
+struct Scene {
+    std::string name = "scene";
+    std::filesystem::path source;  ///< file it was loaded from (empty if built in code)
+    SimulationParams simulation;
+    /// Particles leaving this box stop the run (exit 3). Defaults to the bounding box of the
+    /// boundaries grown by one support radius.
+    std::optional<Aabb> domain;
+    FluidParams fluid;
+    std::vector<FluidBlock> fluid_blocks;
+    std::vector<BoundaryDesc> boundaries;
+    OutputParams output;
+
+    /// @brief Particle radius after `scale`.
+    double particle_radius() const;
+};
+
+/// @brief Loads and validates a scene file. Throws SceneError (a typed InputError) naming the
+/// file, the JSON path, the value found and what was expected.
+/// @param overrides JSON-pointer paths and values applied before validation (command line).
+Scene load_scene(const std::filesystem::path& file,
+                 const std::vector<std::pair<std::string, nlohmann::json>>& overrides = {});
+
+/// @brief Parses and validates scene JSON text; `file` names it in error messages.
+Scene parse_scene(const std::string& text, const std::string& file,
+                  const std::vector<std::pair<std::string, nlohmann::json>>& overrides = {});
+
+/// @brief Parses a command-line `--set path=value`: path in dotted form
+/// (`simulation.stepping.lambda_v`), value as JSON (a bare word is taken as a string).
+std::pair<std::string, nlohmann::json> parse_override(const std::string& assignment);
+
+}  // namespace sph

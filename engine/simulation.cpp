@@ -1,0 +1,268 @@
+#include "engine/simulation.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
+
+#include <cmath>
+#include <sstream>
+
+#include "engine/components.hpp"
+#include "engine/errors.hpp"
+#include "engine/sampling.hpp"
+
+namespace sph {
+
+namespace {
+
+// m = rho0 / sum_j W(x_i - x_j) over an infinite cubic lattice of spacing s (self included),
+// so that a particle inside a filled lattice has exactly the rest density (He eq. 1).
+Real lattice_mass(const CubicSpline& kernel, Real spacing, Real rest_density) {
+    const int reach = static_cast<int>(std::ceil(kernel.support() / spacing)) + 1;
+    double sum = 0;
+    for (int k = -reach; k <= reach; ++k)
+        for (int j = -reach; j <= reach; ++j)
+            for (int i = -reach; i <= reach; ++i)
+                sum += kernel.w(Real(spacing * std::sqrt(double(i * i + j * j + k * k))));
+    return Real(rest_density / sum);
+}
+
+Aabb default_domain(const Scene& scene, double h) {
+    Aabb box{Vec3d::Constant(std::numeric_limits<double>::max()), Vec3d::Constant(std::numeric_limits<double>::lowest())};
+    auto grow = [&](const Vec3d& p) {
+        box.min = box.min.cwiseMin(p);
+        box.max = box.max.cwiseMax(p);
+    };
+    for (const auto& b : scene.boundaries) {
+        if (b.shape == BoundaryShape::Sphere) {
+            grow(b.center - Vec3d::Constant(b.radius));
+            grow(b.center + Vec3d::Constant(b.radius));
+        } else {
+            grow(b.box.min);
+            grow(b.box.max);
+        }
+    }
+    for (const auto& f : scene.fluid_blocks) {
+        grow(f.box.min);
+        grow(f.box.max);
+    }
+    if (box.min[0] > box.max[0]) box = Aabb{Vec3d::Zero(), Vec3d::Constant(1.0)};
+    box.min -= Vec3d::Constant(h);
+    box.max += Vec3d::Constant(h);
+    return box;
+}
+
+}  // namespace
+
+void initialise_world(World& w, const Scene& scene) {
+    w.scene = scene;
+    Physics& ph = w.physics;
+    const double r = scene.particle_radius();
+    ph.particle_radius = Real(r);
+    ph.spacing = Real(2 * r);
+    ph.h = Real(4 * r);
+    ph.rest_density = Real(scene.fluid.rest_density);
+    ph.viscosity = Real(scene.fluid.viscosity);
+    ph.gravity = scene.simulation.gravity.cast<Real>();
+    w.kernel = CubicSpline(ph.h);
+    ph.mass = lattice_mass(w.kernel, ph.spacing, ph.rest_density);
+    w.domain = scene.domain ? *scene.domain : default_domain(scene, 4 * r);
+
+    // Fluid particles.
+    std::vector<Vec3d> xs;
+    std::vector<Vec3d> vs;
+    for (const auto& block : scene.fluid_blocks) {
+        auto pts = sample_block(block.box, 2 * r);
+        xs.insert(xs.end(), pts.begin(), pts.end());
+        vs.insert(vs.end(), pts.size(), block.velocity);
+    }
+    auto& fs = w.fluid.store;
+    fs.add(comp::position);
+    fs.add(comp::velocity);
+    fs.add(comp::id);
+    fs.resize(xs.size());
+    {
+        auto x = fs.get(comp::position);
+        auto v = fs.get(comp::velocity);
+        auto id = fs.get(comp::id);
+        for (std::size_t i = 0; i < xs.size(); ++i) {
+            x[i] = xs[i].cast<Real>();
+            v[i] = vs[i].cast<Real>();
+            id[i] = std::uint32_t(i);
+        }
+    }
+
+    // Boundary particles (static: sampled once, at the fluid spacing r0 = 2 r = h / 2).
+    std::vector<Vec3d> bx, bn;
+    for (const auto& b : scene.boundaries) {
+        auto s = sample_boundary(b, 2 * r);
+        bx.insert(bx.end(), s.positions.begin(), s.positions.end());
+        bn.insert(bn.end(), s.normals.begin(), s.normals.end());
+    }
+    auto& bs = w.boundary.store;
+    bs.add(comp::position);
+    bs.add(comp::normal);
+    bs.resize(bx.size());
+    {
+        auto x = bs.get(comp::position);
+        auto n = bs.get(comp::normal);
+        for (std::size_t i = 0; i < bx.size(); ++i) {
+            x[i] = bx[i].cast<Real>();
+            n[i] = bn[i].cast<Real>();
+        }
+    }
+
+    // Speed of sound: density fluctuation ~ (v_ref / c_s)^2 (Monaghan 1994) with
+    // v_ref = sqrt(2 |g| H), H the fluid's top above the lowest point of the domain.
+    const double g = scene.simulation.gravity.norm();
+    double top = -std::numeric_limits<double>::max(), vmax0 = 0;
+    const Vec3d up = g > 0 ? Vec3d(-scene.simulation.gravity / g) : Vec3d::UnitY();
+    for (std::size_t i = 0; i < xs.size(); ++i) {
+        top = std::max(top, xs[i].dot(up));
+        vmax0 = std::max(vmax0, vs[i].norm());
+    }
+    double bottom = std::numeric_limits<double>::max();
+    for (int c = 0; c < 8; ++c) {
+        const Vec3d corner((c & 1) ? w.domain.max[0] : w.domain.min[0], (c & 2) ? w.domain.max[1] : w.domain.min[1],
+                           (c & 4) ? w.domain.max[2] : w.domain.min[2]);
+        bottom = std::min(bottom, corner.dot(up));
+    }
+    if (!bx.empty()) {
+        bottom = std::numeric_limits<double>::max();
+        for (const auto& p : bx) bottom = std::min(bottom, p.dot(up));
+    }
+    ph.fluid_height = xs.empty() ? 0.0 : std::max(0.0, top - bottom);
+    double vref = std::max(std::sqrt(2.0 * g * ph.fluid_height), vmax0);
+    if (vref <= 0) vref = 1.0;  // nothing moves and nothing falls: any stiffness is stable
+    ph.speed_of_sound = Real(scene.fluid.speed_of_sound ? *scene.fluid.speed_of_sound
+                                                        : vref / std::sqrt(scene.fluid.density_fluctuation));
+    ph.tait_b = ph.rest_density * ph.speed_of_sound * ph.speed_of_sound / Real(7);
+
+    w.fluid_grid = UniformGrid(w.domain, ph.h);
+    Aabb bbox = w.domain;
+    for (const auto& p : bx) {
+        bbox.min = bbox.min.cwiseMin(p);
+        bbox.max = bbox.max.cwiseMax(p);
+    }
+    w.boundary_grid = UniformGrid(bbox, ph.h);
+    if (!bx.empty()) {
+        // Boundary particles never move: store them in z-order once, then index the grid.
+        bs.permute(zorder_permutation(w.boundary_grid, bs.get(comp::position)));
+        w.boundary_grid.build(bs.get(comp::position));
+    }
+    w.step = StepState{};
+    w.step.dt = scene.simulation.stepping.dt;
+}
+
+Simulation::Simulation(const Scene& scene, Recipe recipe) {
+    initialise_world(m_world, scene);
+    for (auto& s : recipe.setup) s->register_components(m_world);
+    for (auto& s : recipe.step) s->register_components(m_world);
+    if (!recipe.setup.empty()) {
+        SystemGraph setup(std::move(recipe.setup), m_world);
+        setup.run();
+    }
+    m_graph = std::make_unique<SystemGraph>(std::move(recipe.step), m_world);
+}
+
+std::size_t Simulation::particle_bytes() const {
+    const World& w = m_world;
+    return w.fluid.store.bytes() + w.boundary.store.bytes() + w.fluid_grid.bytes() + w.boundary_grid.bytes() +
+           w.fluid_neighbours.bytes() + w.boundary_neighbours.bytes();
+}
+
+void Simulation::spatial_sort() {
+    auto perm = zorder_permutation(m_world.fluid_grid, m_world.fluid.store.get(comp::position));
+    m_world.fluid.store.permute(perm);
+}
+
+void Simulation::step() {
+    const int interval = m_world.scene.simulation.sort_interval;
+    if (interval > 0 && m_world.step.step % interval == 0) spatial_sort();
+    m_graph->run();
+    check_step();
+    m_world.step.t += m_world.step.dt;
+    ++m_world.step.step;
+}
+
+void Simulation::run_until(double end_time, const std::function<void(const Simulation&)>& after_step) {
+    // Stop when the remaining time is below a millionth of a step, so round-off never adds
+    // a sliver step at the end.
+    while (m_world.step.t < end_time - 1e-6 * m_world.step.dt) {
+        step();
+        if (after_step) after_step(*this);
+    }
+}
+
+void Simulation::check_step() {
+    World& w = m_world;
+    const auto x = w.fluid.store.get(comp::position);
+    const auto v = w.fluid.store.get(comp::velocity);
+    const Aabb& d = w.domain;
+    // First offending particle by index (deterministic), or n when all are fine.
+    const std::size_t n = x.size();
+    const std::size_t bad = tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, n, 4096), n,
+        [&](const auto& r, std::size_t best) {
+            for (std::size_t i = r.begin(); i < r.end() && i < best; ++i) {
+                const bool finite = x[i].allFinite() && v[i].allFinite();
+                const Vec3d p = x[i].template cast<double>();
+                if (!finite || !d.contains(p)) return i;
+            }
+            return best;
+        },
+        [](std::size_t a, std::size_t b) { return std::min(a, b); });
+    const double dt = w.step.dt;
+    const auto& st = w.scene.simulation.stepping;
+    const auto& systems = m_graph->systems();
+    if (bad == n) {
+        if (!(dt >= st.dt_min) || !std::isfinite(dt)) {
+            std::ostringstream os;
+            os << "time step collapsed at step " << w.step.step << " (t = " << w.step.t << " s): dt = " << dt
+               << " s is below dt_min = " << st.dt_min << " s; the largest acceleration, " << w.step.a_max
+               << " m/s^2, is at particle " << w.step.a_max_particle;
+            throw SimulationError(os.str(), w.step.a_max_particle, w.step.step, "global_dt");
+        }
+        return;
+    }
+    const std::uint32_t id = w.fluid.store.has(comp::id.name) ? w.fluid.store.get(comp::id)[bad] : std::uint32_t(bad);
+    std::ostringstream os;
+    std::string culprit = "unknown";
+    if (x[bad].allFinite() && v[bad].allFinite()) {
+        // Left the domain: the last system that wrote positions moved it.
+        for (const auto& s : systems)
+            for (const auto& wr : s->access().writes)
+                if (wr == res::fluid(comp::position.name)) culprit = s->name();
+        os << "particle " << id << " left the domain at step " << w.step.step << " (t = " << w.step.t
+           << " s): position (" << x[bad].transpose() << ") is outside [" << d.min.transpose() << "] - ["
+           << d.max.transpose() << "], moved by system '" << culprit << "'";
+    } else {
+        // Non-finite: the first system, in recipe order, whose output for it is non-finite.
+        std::string field;
+        for (const auto& s : systems) {
+            for (const auto& wr : s->access().writes) {
+                if (wr.rfind("fluid.", 0) != 0) continue;
+                const std::string col = wr.substr(6);
+                if (!w.fluid.store.has(col)) continue;
+                bool finite = true;
+                try {
+                    finite = w.fluid.store.get(Component<Vec3>{col})[bad].allFinite();
+                } catch (const std::logic_error&) {
+                    try {
+                        finite = std::isfinite(w.fluid.store.get(Component<Real>{col})[bad]);
+                    } catch (const std::logic_error&) {
+                    }
+                }
+                if (!finite && culprit == "unknown") {
+                    culprit = s->name();
+                    field = col;
+                }
+            }
+        }
+        os << "particle " << id << " became non-finite at step " << w.step.step << " (t = " << w.step.t
+           << " s): " << (field.empty() ? "position/velocity" : field) << " is NaN or infinite, first produced by system '"
+           << culprit << "'";
+    }
+    throw SimulationError(os.str(), id, w.step.step, culprit);
+}
+
+}  // namespace sph

@@ -1,0 +1,52 @@
+#pragma once
+/// @file simulation.hpp
+/// @brief Owns a World and the flow graph of a method's systems, and advances time.
+#include <functional>
+#include <memory>
+#include <vector>
+
+#include "engine/system.hpp"
+#include "engine/system_graph.hpp"
+#include "engine/world.hpp"
+
+namespace sph {
+
+/// @brief A method is a recipe of systems chosen from the scene: `setup` runs once after
+/// sampling, `step` every step (both as flow graphs).
+struct Recipe {
+    std::vector<std::unique_ptr<System>> setup;
+    std::vector<std::unique_ptr<System>> step;
+};
+
+/// @brief Samples the scene into a World: fluid lattice, boundary surfaces, the derived
+/// constants (mass, c_s, B), the domain and the grids. Registers position, velocity and id.
+void initialise_world(World& world, const Scene& scene);
+
+class Simulation {
+public:
+    /// @brief Samples the scene, registers the recipe's components, runs the setup graph.
+    Simulation(const Scene& scene, Recipe recipe);
+
+    /// @brief Advances one step. Throws SimulationError on a NaN, a particle outside the
+    /// domain or a step below dt_min, naming the particle, the step and the system.
+    void step();
+    /// @brief Steps until `end_time` (the scene's by default), calling `after_step` each step.
+    void run_until(double end_time, const std::function<void(const Simulation&)>& after_step = {});
+
+    World& world() { return m_world; }
+    const World& world() const { return m_world; }
+    double time() const { return m_world.step.t; }
+    std::int64_t steps() const { return m_world.step.step; }
+    const SystemGraph& graph() const { return *m_graph; }
+    /// @brief Bytes held by particle columns, grids and neighbour lists.
+    std::size_t particle_bytes() const;
+
+private:
+    void check_step();
+    void spatial_sort();
+
+    World m_world;
+    std::unique_ptr<SystemGraph> m_graph;
+};
+
+}  // namespace sph

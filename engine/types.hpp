@@ -1,0 +1,21 @@
+#pragma once
+/// @file types.hpp
+/// @brief Scalar and vector types shared by the whole engine.
+#include <Eigen/Core>
+#include <cstdint>
+
+namespace sph {
+
+#ifdef SPH_DOUBLE
+using Real = double;
+#else
+/// @brief Particle field precision: float by default, double with SPH_DOUBLE=ON.
+using Real = float;
+#endif
+
+using Vec3 = Eigen::Matrix<Real, 3, 1>;
+/// @brief Double-precision 3-vector for scene geometry and reductions.
+using Vec3d = Eigen::Matrix<double, 3, 1>;
+using Index = std::uint32_t;
+
+}  // namespace sph

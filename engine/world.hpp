@@ -1,0 +1,73 @@
+#pragma once
+/// @file world.hpp
+/// @brief All simulation data: the fluid and boundary particle sets (component stores), their
+/// grids and neighbour lists, the derived physical constants and the current step's scalars.
+/// Systems receive it as an argument; there are no globals.
+#include <cstdint>
+#include <limits>
+
+#include "engine/component_store.hpp"
+#include "engine/grid.hpp"
+#include "engine/kernel.hpp"
+#include "engine/scene.hpp"
+
+namespace sph {
+
+/// @brief Resource names used in system access declarations.
+namespace res {
+inline std::string fluid(std::string_view component) { return "fluid." + std::string(component); }
+inline std::string boundary(std::string_view component) { return "boundary." + std::string(component); }
+inline const std::string fluid_grid = "fluid.grid";
+inline const std::string fluid_neighbours = "fluid.neighbours";
+inline const std::string boundary_neighbours = "fluid.boundary_neighbours";
+inline const std::string boundary_grid = "boundary.grid";
+inline const std::string dt = "step.dt";
+inline const std::string stats = "step.stats";
+}  // namespace res
+
+/// @brief Constants derived from the scene once (SI units).
+struct Physics {
+    Real particle_radius = 0;
+    Real spacing = 0;         ///< 2 r: lattice spacing of fluid and boundary sampling
+    Real h = 0;               ///< support radius, 4 r
+    Real rest_density = 1000;
+    Real mass = 0;            ///< m = rho0 / sum_j W_ij over a filled lattice (see README)
+    Real speed_of_sound = 0;  ///< c_s
+    Real tait_b = 0;          ///< B = rho0 c_s^2 / gamma, gamma = 7 (He eq. 2)
+    Real viscosity = 0;       ///< Monaghan alpha
+    Vec3 gravity = Vec3::Zero();
+    double fluid_height = 0;  ///< m, used for the default c_s
+};
+
+/// @brief Per-step scalars, written by the step's systems.
+struct StepState {
+    double t = 0;               ///< simulated time at the start of the step (s)
+    double dt = 0;              ///< the step being taken (s)
+    std::int64_t step = 0;      ///< index of the step being taken
+    std::uint64_t updated = 0;  ///< fluid particles whose forces were evaluated
+    std::uint64_t neighbour_pairs = 0;  ///< fluid-fluid list entries of updated particles
+    double rho_err_avg = 0, rho_err_max = 0;  ///< max(rho/rho0 - 1, 0), fluid average and max
+    double v_max = 0, a_max = 0;
+    Index a_max_particle = 0;
+};
+
+struct ParticleSet {
+    ComponentStore store;
+    std::size_t size() const { return store.size(); }
+};
+
+struct World {
+    Scene scene;
+    Physics physics;
+    Aabb domain;
+    CubicSpline kernel{1};
+    ParticleSet fluid;
+    ParticleSet boundary;
+    UniformGrid fluid_grid;
+    UniformGrid boundary_grid;
+    NeighbourLists fluid_neighbours;     ///< fluid -> fluid (self excluded)
+    NeighbourLists boundary_neighbours;  ///< fluid -> boundary
+    StepState step;
+};
+
+}  // namespace sph

@@ -1,0 +1,22 @@
+#pragma once
+/// @file density_system.hpp
+/// @brief He et al. eq. 1 (summation density) plus the boundary contribution of Akinci et al.
+/// 2012 eq. 6, then the Tait pressure (He eq. 2).
+#include "engine/system.hpp"
+
+namespace sph {
+
+class DensitySystem final : public System {
+public:
+    /// @param with_boundary add the boundary contribution (only when the scene has one).
+    explicit DensitySystem(bool with_boundary) : m_with_boundary(with_boundary) {}
+    std::string name() const override { return "density"; }
+    Access access() const override;
+    void register_components(World& w) override;
+    void run(World& w) override;
+
+private:
+    bool m_with_boundary;
+};
+
+}  // namespace sph

@@ -1,0 +1,21 @@
+#pragma once
+/// @file forces_system.hpp
+/// @brief He et al. eq. 4: symmetric pressure force, Monaghan artificial viscosity, gravity,
+/// and the boundary forces of Akinci et al. 2012 (pressure eq. 10, viscosity eq. 11).
+#include "engine/system.hpp"
+
+namespace sph {
+
+class ForcesSystem final : public System {
+public:
+    explicit ForcesSystem(bool with_boundary) : m_with_boundary(with_boundary) {}
+    std::string name() const override { return "forces"; }
+    Access access() const override;
+    void register_components(World& w) override;
+    void run(World& w) override;
+
+private:
+    bool m_with_boundary;
+};
+
+}  // namespace sph

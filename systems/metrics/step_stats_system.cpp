@@ -1,0 +1,71 @@
+#include "systems/metrics/step_stats_system.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
+
+#include "engine/components.hpp"
+#include "engine/world.hpp"
+
+namespace sph {
+
+Access StepStatsSystem::access() const {
+    return {{res::fluid(comp::density.name), res::fluid(comp::velocity.name), res::fluid(comp::acceleration.name),
+             res::fluid_neighbours},
+            {res::stats}};
+}
+
+namespace {
+struct Acc {
+    double err_sum = 0, err_max = 0, v2_max = 0, a2_max = 0;
+    Index a_arg = 0;
+    std::uint64_t pairs = 0;
+};
+}  // namespace
+
+void StepStatsSystem::run(World& w) {
+    const auto rho = w.fluid.store.get(comp::density);
+    const auto v = w.fluid.store.get(comp::velocity);
+    const auto a = w.fluid.store.get(comp::acceleration);
+    const double rho0 = w.physics.rest_density;
+    const auto& counts = w.fluid_neighbours.count;
+    const std::size_t n = rho.size();
+    // Deterministic reduction: the same sums whatever the thread count.
+    const Acc r = tbb::parallel_deterministic_reduce(
+        tbb::blocked_range<std::size_t>(0, n, 1024), Acc{},
+        [&](const auto& range, Acc acc) {
+            for (std::size_t i = range.begin(); i < range.end(); ++i) {
+                const double e = std::max(0.0, double(rho[i]) / rho0 - 1.0);
+                acc.err_sum += e;
+                acc.err_max = std::max(acc.err_max, e);
+                acc.v2_max = std::max(acc.v2_max, double(v[i].squaredNorm()));
+                const double a2 = a[i].squaredNorm();
+                if (a2 > acc.a2_max || (a2 == acc.a2_max && i < acc.a_arg)) {
+                    acc.a2_max = a2;
+                    acc.a_arg = Index(i);
+                }
+                if (i < counts.size()) acc.pairs += counts[i];
+            }
+            return acc;
+        },
+        [](Acc x, const Acc& y) {
+            x.err_sum += y.err_sum;
+            x.err_max = std::max(x.err_max, y.err_max);
+            x.v2_max = std::max(x.v2_max, y.v2_max);
+            if (y.a2_max > x.a2_max) {
+                x.a2_max = y.a2_max;
+                x.a_arg = y.a_arg;
+            }
+            x.pairs += y.pairs;
+            return x;
+        });
+    StepState& s = w.step;
+    s.rho_err_avg = n ? r.err_sum / double(n) : 0.0;
+    s.rho_err_max = r.err_max;
+    s.v_max = std::sqrt(r.v2_max);
+    s.a_max = std::sqrt(r.a2_max);
+    s.a_max_particle = r.a_arg;
+    s.updated = n;
+    s.neighbour_pairs = r.pairs;
+}
+
+}  // namespace sph

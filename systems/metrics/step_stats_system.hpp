@@ -1,0 +1,16 @@
+#pragma once
+/// @file step_stats_system.hpp
+/// @brief Per-step diagnostics: density error avg/max (rho_err = max(rho/rho0 - 1, 0)),
+/// v_max and a_max (He eq. 6-7 need them), particles updated and neighbour pairs.
+#include "engine/system.hpp"
+
+namespace sph {
+
+class StepStatsSystem final : public System {
+public:
+    std::string name() const override { return "step_stats"; }
+    Access access() const override;
+    void run(World& w) override;
+};
+
+}  // namespace sph

@@ -1,0 +1,27 @@
+// He et al. eq. 6 (CFL), eq. 7 (force) and eq. 8 (their minimum); the acoustic condition
+// dt <= lambda_c h / (c_s + v_max) is our named option `stepping.acoustic` (README: why).
+#include "systems/timestep/global_dt_system.hpp"
+
+#include <cmath>
+#include <limits>
+
+#include "engine/world.hpp"
+
+namespace sph {
+
+double global_time_step(const SteppingParams& p, double h, double c_s, double v_max, double a_max) {
+    double dt = p.dt_max;
+    if (v_max > 0) dt = std::min(dt, p.lambda_v * h / v_max);       // eq. 6
+    if (a_max > 0) dt = std::min(dt, p.lambda_f * std::sqrt(h / a_max));  // eq. 7
+    if (p.acoustic) dt = std::min(dt, p.lambda_c * h / (c_s + v_max));
+    return dt;  // eq. 8
+}
+
+Access GlobalDtSystem::access() const { return {{res::stats}, {res::dt}}; }
+
+void GlobalDtSystem::run(World& w) {
+    w.step.dt = global_time_step(w.scene.simulation.stepping, w.physics.h, w.physics.speed_of_sound, w.step.v_max,
+                                 w.step.a_max);
+}
+
+}  // namespace sph

@@ -1,0 +1,23 @@
+#pragma once
+/// @file global_dt_system.hpp
+/// @brief Globally adaptive step, He et al. eq. 6-8:
+/// dt = min(lambda_v h / v_max, lambda_f sqrt(h / a_max)), optionally also the acoustic
+/// condition dt <= lambda_c h / (c_s + v_max), and never above dt_max.
+#include "engine/system.hpp"
+#include "engine/types.hpp"
+
+namespace sph {
+
+struct SteppingParams;
+
+/// @brief The step of He eq. 6-8 (+ acoustic) for given maxima; infinity-safe for v = a = 0.
+double global_time_step(const SteppingParams& p, double h, double c_s, double v_max, double a_max);
+
+class GlobalDtSystem final : public System {
+public:
+    std::string name() const override { return "global_dt"; }
+    Access access() const override;
+    void run(World& w) override;
+};
+
+}  // namespace sph
