@@ -1,0 +1,119 @@
+// The uniform grid's neighbour lists must equal brute force exactly (engine/grid.hpp).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <random>
+#include <set>
+
+#include "engine/grid.hpp"
+
+using namespace sph;
+
+namespace {
+
+std::vector<Index> brute(std::span<const Vec3> q, std::span<const Vec3> pts, Index i, Real r, bool exclude_self) {
+    std::vector<Index> out;
+    for (Index j = 0; j < pts.size(); ++j)
+        if ((q[i] - pts[j]).squaredNorm() < r * r && !(exclude_self && j == i)) out.push_back(j);
+    return out;
+}
+
+// Random cloud with negative coordinates, plus points exactly on cell borders and pairs at
+// exactly the radius (which must be excluded: the test is strict, r^2 < h^2).
+std::vector<Vec3> cloud(std::size_t n, Real h, unsigned seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<Real> u(-1.0f, 0.5f);
+    std::vector<Vec3> pts;
+    for (std::size_t i = 0; i < n; ++i) pts.emplace_back(u(rng), u(rng), u(rng));
+    for (int i = -5; i <= 5; ++i) {
+        pts.emplace_back(i * h, 0, 0);              // on cell borders (origin at -1 - h)
+        pts.emplace_back(i * h, i * h, -i * h);
+        pts.emplace_back(Real(-1 + h * 3), i * h * 0.5f, 0);
+    }
+    pts.emplace_back(0.1f, 0.1f, 0.1f);
+    pts.emplace_back(0.1f + h, 0.1f, 0.1f);  // exactly h apart (up to rounding)
+    pts.emplace_back(0.1f, 0.1f, 0.1f);      // duplicate position
+    return pts;
+}
+
+void expect_equal_to_brute(const UniformGrid& grid, std::span<const Vec3> q, std::span<const Vec3> pts, Real h,
+                           bool exclude_self, const NeighbourLists& lists, std::span<const Index> which) {
+    for (Index i : which) {
+        auto got = std::vector<Index>(lists.of(i).begin(), lists.of(i).end());
+        std::sort(got.begin(), got.end());
+        EXPECT_EQ(got, brute(q, pts, i, h, exclude_self)) << "particle " << i;
+    }
+}
+
+}  // namespace
+
+TEST(NeighbourSearch, EqualsBruteForceOnRandomCloud) {
+    const Real h = 0.07f;
+    auto pts = cloud(3000, h, 1);
+    UniformGrid grid(Aabb{Vec3d(-1, -1, -1), Vec3d(0.5, 0.5, 0.5)}, h);
+    grid.build(pts);
+    NeighbourLists lists;
+    build_neighbour_lists(grid, pts, h, true, QuerySubset{}, lists);
+    std::vector<Index> all(pts.size());
+    for (Index i = 0; i < all.size(); ++i) all[i] = i;
+    expect_equal_to_brute(grid, pts, pts, h, true, lists, all);
+}
+
+TEST(NeighbourSearch, CrossSetQueriesIncludeEveryMatch) {
+    const Real h = 0.1f;
+    auto pts = cloud(2000, h, 2);
+    auto q = cloud(500, h, 3);
+    UniformGrid grid(Aabb{Vec3d(-1, -1, -1), Vec3d(0.5, 0.5, 0.5)}, h);
+    grid.build(pts);
+    NeighbourLists lists;
+    build_neighbour_lists(grid, q, h, false, QuerySubset{}, lists);
+    for (Index i = 0; i < q.size(); ++i) {
+        auto got = std::vector<Index>(lists.of(i).begin(), lists.of(i).end());
+        std::sort(got.begin(), got.end());
+        std::vector<Index> expect;
+        for (Index j = 0; j < pts.size(); ++j)
+            if ((q[i] - pts[j]).squaredNorm() < h * h) expect.push_back(j);
+        EXPECT_EQ(got, expect) << "query " << i;
+    }
+}
+
+// A subset rebuild touches only the subset; a dense cluster forces the capacity to grow and
+// every list to be rebuilt in the new layout.
+TEST(NeighbourSearch, SubsetRebuildAndCapacityGrowth) {
+    const Real h = 0.1f;
+    auto pts = cloud(1500, h, 4);
+    UniformGrid grid(Aabb{Vec3d(-1, -1, -1), Vec3d(0.5, 0.5, 0.5)}, h);
+    grid.build(pts);
+    NeighbourLists lists;
+    build_neighbour_lists(grid, pts, h, true, QuerySubset{}, lists);
+    // Move a few particles into one dense clump, then rebuild only them.
+    std::vector<Index> moved;
+    for (Index i = 0; i < 120; ++i) {
+        pts[i * 10] = Vec3(0.2f + 0.0001f * i, 0.2f, 0.2f);
+        moved.push_back(i * 10);
+    }
+    grid.build(pts);
+    const Index cap_before = lists.capacity;
+    build_neighbour_lists(grid, pts, h, true, QuerySubset{moved, false}, lists);
+    EXPECT_GT(lists.capacity, cap_before);
+    expect_equal_to_brute(grid, pts, pts, h, true, lists, moved);
+    // After growth every list was rebuilt, so all match brute force for the new positions.
+    std::vector<Index> all(pts.size());
+    for (Index i = 0; i < all.size(); ++i) all[i] = i;
+    expect_equal_to_brute(grid, pts, pts, h, true, lists, all);
+}
+
+TEST(NeighbourSearch, ZOrderPermutationIsAPermutation) {
+    const Real h = 0.1f;
+    auto pts = cloud(1000, h, 5);
+    UniformGrid grid(Aabb{Vec3d(-1, -1, -1), Vec3d(0.5, 0.5, 0.5)}, h);
+    auto perm = zorder_permutation(grid, pts);
+    std::set<Index> s(perm.begin(), perm.end());
+    EXPECT_EQ(s.size(), pts.size());
+    EXPECT_EQ(*s.rbegin(), pts.size() - 1);
+    // Consecutive particles in z-order are mostly in the same or adjacent cells.
+    std::size_t near = 0;
+    for (std::size_t i = 1; i < perm.size(); ++i)
+        if ((grid.cell_coords(pts[perm[i]]) - grid.cell_coords(pts[perm[i - 1]])).cwiseAbs().maxCoeff() <= 1) ++near;
+    EXPECT_GT(near, perm.size() / 2);
+}

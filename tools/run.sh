@@ -1,0 +1,11 @@
+#!/usr/bin/env bash
+# Installs what is missing, builds Release and runs the default scene (scenes/dam_break.json).
+# Outputs: out/dam_break/{stats.csv,summary.json,frames/*.vtu}. Extra arguments go to sph-run.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bash tools/install_deps.sh
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DSPH_BUILD_TESTS=OFF -DSPH_BUILD_BENCH=OFF >/dev/null
+cmake --build build --target sph-run -j"$(nproc)"
+./build/tools/sph-run scenes/dam_break.json --out out/dam_break "$@"
+echo "summary: out/dam_break/summary.json"
+cat out/dam_break/summary.json
