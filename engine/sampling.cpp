@@ -47,15 +47,22 @@ SurfaceSamples box_surface(const Aabb& box, double spacing, double normal_sign) 
 
 }  // namespace
 
-SurfaceSamples sample_boundary(const BoundaryDesc& b, double spacing) {
+SurfaceSamples sample_boundary(const BoundaryDesc& b, double spacing, double offset) {
     switch (b.shape) {
-        case BoundaryShape::Container:
-            return box_surface(b.box, spacing, -1.0);  // the fluid is inside
-        case BoundaryShape::Box:
-            return box_surface(b.box, spacing, 1.0);
+        case BoundaryShape::Container: {  // the fluid is inside: samples outside the box
+            const Aabb grown{b.box.min - Vec3d::Constant(offset), b.box.max + Vec3d::Constant(offset)};
+            return box_surface(grown, spacing, -1.0);
+        }
+        case BoundaryShape::Box: {  // solid: samples inside it
+            Aabb shrunk{b.box.min + Vec3d::Constant(offset), b.box.max - Vec3d::Constant(offset)};
+            for (int a = 0; a < 3; ++a)
+                if (shrunk.min[a] > shrunk.max[a]) shrunk.min[a] = shrunk.max[a] = 0.5 * (b.box.min[a] + b.box.max[a]);
+            return box_surface(shrunk, spacing, 1.0);
+        }
         case BoundaryShape::Sphere: {
             SurfaceSamples s;
-            const double area = 4.0 * std::numbers::pi * b.radius * b.radius;
+            const double radius = std::max(b.radius - offset, 0.5 * b.radius);
+            const double area = 4.0 * std::numbers::pi * radius * radius;
             const int count = std::max(12, static_cast<int>(std::lround(area / (spacing * spacing))));
             const double golden = std::numbers::pi * (3.0 - std::sqrt(5.0));
             for (int i = 0; i < count; ++i) {
@@ -63,7 +70,7 @@ SurfaceSamples sample_boundary(const BoundaryDesc& b, double spacing) {
                 const double rad = std::sqrt(std::max(0.0, 1.0 - y * y));
                 const double phi = golden * i;
                 const Vec3d nrm(std::cos(phi) * rad, y, std::sin(phi) * rad);
-                s.positions.push_back(b.center + b.radius * nrm);
+                s.positions.push_back(b.center + radius * nrm);
                 s.normals.push_back(nrm);
             }
             return s;

@@ -17,6 +17,10 @@ std::vector<Vec3d> sample_block(const Aabb& box, double spacing);
 
 /// @brief Boundary surface samples at a spacing as close to `spacing` as divides each edge
 /// evenly (a container's walls, a box's faces) or a Fibonacci sphere of area / spacing^2 points.
-SurfaceSamples sample_boundary(const BoundaryDesc& b, double spacing);
+/// The samples sit `offset` (one particle radius) behind the declared surface, on the solid
+/// side: a boundary particle is a sphere of radius r touching the surface, so a fluid particle
+/// resting on it is one spacing from the boundary layer, as in the fluid lattice. Sampling on
+/// the surface itself puts the first fluid layer at half a spacing and over-counts its density.
+SurfaceSamples sample_boundary(const BoundaryDesc& b, double spacing, double offset);
 
 }  // namespace sph

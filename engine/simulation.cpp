@@ -94,7 +94,7 @@ void initialise_world(World& w, const Scene& scene) {
     // Boundary particles (static: sampled once, at the fluid spacing r0 = 2 r = h / 2).
     std::vector<Vec3d> bx, bn;
     for (const auto& b : scene.boundaries) {
-        auto s = sample_boundary(b, 2 * r);
+        auto s = sample_boundary(b, 2 * r, r);
         bx.insert(bx.end(), s.positions.begin(), s.positions.end());
         bn.insert(bn.end(), s.normals.begin(), s.normals.end());
     }

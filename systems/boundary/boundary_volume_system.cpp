@@ -1,12 +1,23 @@
-// Akinci et al. 2012 ("Versatile rigid-fluid coupling"), eq. 4: V_b = 1 / sum_k W(x_b - x_k).
+// Akinci et al. 2012 ("Versatile rigid-fluid coupling"), eq. 4: V_b = 1 / sum_k W(x_b - x_k),
+// scaled by gamma = s^3 sum_plane W (boundary_volume_gamma): see the header.
 #include "systems/boundary/boundary_volume_system.hpp"
 
 #include <tbb/parallel_for.h>
+
+#include <cmath>
 
 #include "engine/components.hpp"
 #include "engine/world.hpp"
 
 namespace sph {
+
+Real boundary_volume_gamma(const CubicSpline& kernel, Real spacing) {
+    const int reach = static_cast<int>(std::ceil(kernel.support() / spacing)) + 1;
+    double sum = 0;
+    for (int j = -reach; j <= reach; ++j)
+        for (int i = -reach; i <= reach; ++i) sum += kernel.w(Real(spacing * std::sqrt(double(i * i + j * j))));
+    return Real(double(spacing) * spacing * spacing * sum);
+}
 
 Access BoundaryVolumeSystem::access() const {
     return {{res::boundary(comp::position.name), res::boundary_grid}, {res::boundary(comp::volume.name)}};
@@ -19,6 +30,7 @@ void BoundaryVolumeSystem::run(World& w) {
     auto vol = w.boundary.store.get(comp::volume);
     const CubicSpline& kernel = w.kernel;
     const Real h2 = kernel.support() * kernel.support();
+    const Real gamma = boundary_volume_gamma(kernel, w.physics.spacing);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 1024), [&](const auto& r) {
         for (std::size_t b = r.begin(); b < r.end(); ++b) {
             Real sum = 0;
@@ -26,7 +38,7 @@ void BoundaryVolumeSystem::run(World& w) {
                 const Real d2 = (x[b] - xk).squaredNorm();
                 if (d2 < h2) sum += kernel.w(std::sqrt(d2));
             });
-            vol[b] = Real(1) / sum;  // sum >= W(0) > 0: b is its own neighbour
+            vol[b] = gamma / sum;  // sum >= W(0) > 0: b is its own neighbour
         }
     });
 }

@@ -1,0 +1,25 @@
+// BM_DensitySystem: summation density + Tait EOS (systems/density).
+#include <benchmark/benchmark.h>
+
+#include "bench_util.hpp"
+#include "systems/density/density_system.hpp"
+#include "systems/neighbours/neighbour_search_system.hpp"
+
+using namespace sph;
+
+static void BM_DensitySystem(benchmark::State& state) {
+    auto w = bench::lattice_world(std::size_t(state.range(0)));
+    DensitySystem density(false);
+    density.register_components(*w);
+    FluidGridSystem().run(*w);
+    FluidNeighbourSystem().run(*w);
+    for (auto _ : state) {
+        density.run(*w);
+        benchmark::ClobberMemory();
+    }
+    const double n = double(w->fluid.size());
+    state.SetItemsProcessed(state.iterations() * std::int64_t(n));
+    state.counters["particles"] = n;
+    state.counters["neighbours_per_particle"] = double(w->fluid_neighbours.total()) / n;
+}
+BENCHMARK(BM_DensitySystem)->Arg(10'000)->Arg(100'000)->Arg(1'000'000)->Unit(benchmark::kMillisecond)->UseRealTime();

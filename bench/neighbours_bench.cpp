@@ -1,0 +1,23 @@
+// BM_NeighbourSearch: fluid grid build + fluid->fluid lists (systems/neighbours).
+#include <benchmark/benchmark.h>
+
+#include "bench_util.hpp"
+#include "systems/neighbours/neighbour_search_system.hpp"
+
+using namespace sph;
+
+static void BM_NeighbourSearch(benchmark::State& state) {
+    auto w = bench::lattice_world(std::size_t(state.range(0)));
+    FluidGridSystem grid;
+    FluidNeighbourSystem lists;
+    for (auto _ : state) {
+        grid.run(*w);
+        lists.run(*w);
+        benchmark::ClobberMemory();
+    }
+    const double n = double(w->fluid.size());
+    state.SetItemsProcessed(state.iterations() * std::int64_t(n));
+    state.counters["particles"] = n;
+    state.counters["neighbours_per_particle"] = double(w->fluid_neighbours.total()) / n;
+}
+BENCHMARK(BM_NeighbourSearch)->Arg(10'000)->Arg(100'000)->Arg(1'000'000)->Unit(benchmark::kMillisecond)->UseRealTime();
