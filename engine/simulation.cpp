@@ -178,6 +178,13 @@ void Simulation::spatial_sort() {
 void Simulation::step() {
     const int interval = m_world.scene.simulation.sort_interval;
     if (interval > 0 && m_world.step.step % interval == 0) spatial_sort();
+    StepState& st = m_world.step;
+    if (m_world.scene.simulation.stepping.mode == SteppingMode::Constant) {
+        // Constant stepping has no dt system: the step is the scene's, clipped at the end.
+        st.dt_stable = m_world.scene.simulation.stepping.dt;
+        st.dt = std::min(st.dt_stable, st.t_stop - st.t);
+        if (st.dt <= 0) st.dt = st.dt_stable;
+    }
     m_graph->run();
     check_step();
     m_world.step.t += m_world.step.dt;
@@ -187,10 +194,12 @@ void Simulation::step() {
 void Simulation::run_until(double end_time, const std::function<void(const Simulation&)>& after_step) {
     // Stop when the remaining time is below a millionth of a step, so round-off never adds
     // a sliver step at the end.
-    while (m_world.step.t < end_time - 1e-6 * m_world.step.dt) {
+    m_world.step.t_stop = end_time;
+    while (m_world.step.t < end_time - 1e-9 * std::max(m_world.step.dt, 1e-12)) {
         step();
         if (after_step) after_step(*this);
     }
+    m_world.step.t_stop = std::numeric_limits<double>::infinity();
 }
 
 void Simulation::check_step() {
@@ -215,9 +224,10 @@ void Simulation::check_step() {
     const auto& st = w.scene.simulation.stepping;
     const auto& systems = m_graph->systems();
     if (bad == n) {
-        if (!(dt >= st.dt_min) || !std::isfinite(dt)) {
+        const double stable = w.step.dt_stable > 0 ? w.step.dt_stable : dt;  // a clipped last step is fine
+        if (!(stable >= st.dt_min) || !std::isfinite(dt)) {
             std::ostringstream os;
-            os << "time step collapsed at step " << w.step.step << " (t = " << w.step.t << " s): dt = " << dt
+            os << "time step collapsed at step " << w.step.step << " (t = " << w.step.t << " s): dt = " << stable
                << " s is below dt_min = " << st.dt_min << " s; the largest acceleration, " << w.step.a_max
                << " m/s^2, is at particle " << w.step.a_max_particle;
             throw SimulationError(os.str(), w.step.a_max_particle, w.step.step, "global_dt");

@@ -43,6 +43,9 @@ struct Physics {
 struct StepState {
     double t = 0;               ///< simulated time at the start of the step (s)
     double dt = 0;              ///< the step being taken (s)
+    double dt_stable = 0;       ///< the step the stability conditions allow (before clipping)
+    /// No step may end past this time (the run's end): the dt system clips the last step.
+    double t_stop = std::numeric_limits<double>::infinity();
     std::int64_t step = 0;      ///< index of the step being taken
     std::uint64_t updated = 0;  ///< fluid particles whose forces were evaluated
     std::uint64_t neighbour_pairs = 0;  ///< fluid-fluid list entries of updated particles

@@ -86,7 +86,7 @@ int main(int argc, char** argv) {
             sim->graph().write_dot(graph_file);
             spdlog::info("system graph written to {}", graph_file);
         }
-        const std::filesystem::path out = out_dir.empty() ? std::filesystem::path("out") / scene.name : out_dir;
+        const std::filesystem::path out = out_dir.empty() ? std::filesystem::path("out") / scene.name : std::filesystem::path(out_dir);
         recorder = std::make_unique<sph::Recorder>(out, *sim);
         recorder->begin(*sim);
 

@@ -20,8 +20,11 @@ double global_time_step(const SteppingParams& p, double h, double c_s, double v_
 Access GlobalDtSystem::access() const { return {{res::stats}, {res::dt}}; }
 
 void GlobalDtSystem::run(World& w) {
-    w.step.dt = global_time_step(w.scene.simulation.stepping, w.physics.h, w.physics.speed_of_sound, w.step.v_max,
-                                 w.step.a_max);
+    StepState& s = w.step;
+    s.dt_stable = global_time_step(w.scene.simulation.stepping, w.physics.h, w.physics.speed_of_sound, s.v_max, s.a_max);
+    // The last step is shortened so that the run ends exactly at its end time.
+    s.dt = std::min(s.dt_stable, std::max(s.t_stop - s.t, 0.0));
+    if (s.dt <= 0) s.dt = s.dt_stable;
 }
 
 }  // namespace sph

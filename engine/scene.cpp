@@ -1,0 +1,1040 @@
+/// @file scene.cpp
+/// @brief Strict scene loading: JSON text -> validated Scene. Every error names the file, the
+/// JSON path, the value found and what was expected (format and ranges: scenes/README.md).
+#include "engine/scene.hpp"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <cerrno>
+#include <climits>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <limits>
+#include <memory>
+#include <numbers>
+#include <span>
+#include <string_view>
+#include <system_error>
+#include <utility>
+
+#include "engine/errors.hpp"
+
+namespace sph {
+
+using json = nlohmann::json;
+
+const char* to_string(Method m) {
+    switch (m) {
+        case Method::Wcsph:
+            return "wcsph";
+    }
+    return "unknown";
+}
+
+const char* to_string(SteppingMode m) {
+    switch (m) {
+        case SteppingMode::Constant:
+            return "constant";
+        case SteppingMode::Global:
+            return "global";
+    }
+    return "unknown";
+}
+
+const char* to_string(BoundaryShape s) {
+    switch (s) {
+        case BoundaryShape::Container:
+            return "container";
+        case BoundaryShape::Box:
+            return "box";
+        case BoundaryShape::Sphere:
+            return "sphere";
+    }
+    return "unknown";
+}
+
+double Scene::particle_radius() const {
+    return fluid.particle_radius / std::cbrt(simulation.scale);
+}
+
+namespace {
+
+// ---- Vocabulary: keys per section (in the order they are listed in messages) and names. ----
+
+constexpr std::array<const char*, 8> k_top_keys{"name",  "description",  "simulation", "domain",
+                                                "fluid", "fluid_blocks", "boundaries", "output"};
+constexpr std::array<const char*, 7> k_simulation_keys{
+    "method", "stepping", "end_time", "frame_rate", "scale", "gravity", "sort_interval"};
+constexpr std::array<const char*, 8> k_stepping_keys{"mode",     "dt",       "lambda_v", "lambda_f",
+                                                     "acoustic", "lambda_c", "dt_max",   "dt_min"};
+constexpr std::array<const char*, 5> k_fluid_keys{"rest_density", "particle_radius", "viscosity",
+                                                  "speed_of_sound", "density_fluctuation"};
+constexpr std::array<const char*, 2> k_box_keys{"min", "max"};
+constexpr std::array<const char*, 3> k_block_keys{"min", "max", "velocity"};
+constexpr std::array<const char*, 3> k_boxlike_boundary_keys{"type", "min", "max"};
+constexpr std::array<const char*, 3> k_sphere_boundary_keys{"type", "center", "radius"};
+constexpr std::array<const char*, 2> k_output_keys{"format", "attributes"};
+
+constexpr const char* k_name_expected =
+    "a non-empty string without \"/\" (it names the output folder)";
+
+constexpr std::array<Method, 1> k_methods{Method::Wcsph};
+constexpr std::array<SteppingMode, 2> k_modes{SteppingMode::Constant, SteppingMode::Global};
+constexpr std::array<BoundaryShape, 3> k_shapes{BoundaryShape::Container, BoundaryShape::Box,
+                                                BoundaryShape::Sphere};
+constexpr std::array<const char*, 1> k_formats{"vtu"};
+constexpr std::array<const char*, 4> k_attributes{"velocity", "density", "pressure",
+                                                  "acceleration"};
+
+// ---- Small string helpers. ----
+
+/// JSON pointer token escaping (RFC 6901): '~' -> "~0", '/' -> "~1".
+std::string escape_token(std::string_view key) {
+    std::string out;
+    for (const char c : key) {
+        if (c == '~') {
+            out += "~0";
+        } else if (c == '/') {
+            out += "~1";
+        } else {
+            out += c;
+        }
+    }
+    return out;
+}
+
+// Paths are JSON pointers; the root is "" internally and shown as "/".
+std::string child(const std::string& path, std::string_view key) {
+    return path + "/" + escape_token(key);
+}
+std::string child(const std::string& path, std::size_t index) {
+    return path + "/" + std::to_string(index);
+}
+std::string shown(const std::string& path) {
+    return path.empty() ? "/" : path;
+}
+
+/// Keeps messages one readable line: long values are cut (on a UTF-8 boundary) with "...".
+std::string truncate(std::string s, std::size_t max_chars = 80) {
+    if (s.size() <= max_chars) return s;
+    std::size_t cut = max_chars - 3;
+    while (cut > 0 && (static_cast<unsigned char>(s[cut]) & 0xC0) == 0x80) --cut;
+    s.resize(cut);
+    return s + "...";
+}
+
+std::string dump(const json& v) {
+    return truncate(v.dump());
+}
+std::string in_quotes(std::string_view s) {
+    return json(std::string(s)).dump();
+}
+
+/// Shortest round-trip form ("0.1", "1e-05"), without the ".0" json adds to integral values.
+std::string fmt_num(double x) {
+    std::string s = json(x).dump();
+    if (s.size() > 2 && s.ends_with(".0")) s.resize(s.size() - 2);
+    return s;
+}
+
+/// Computed values (spacing, ...): 6 significant digits, so 0.04000000000000001 reads 0.04.
+std::string fmt_computed(double x) {
+    std::array<char, 64> buf{};
+    std::snprintf(buf.data(), buf.size(), "%.6g", x);
+    return buf.data();
+}
+
+std::string fmt_vec(const Vec3d& v) {
+    return "[" + fmt_num(v[0]) + "," + fmt_num(v[1]) + "," + fmt_num(v[2]) + "]";
+}
+
+/// Plain digits up to 1e15 ("125000000000000"), then 3 significant digits; never "inf".
+std::string fmt_large(double x, int decimals) {
+    if (!std::isfinite(x)) return "more than 1e308";
+    std::array<char, 64> buf{};
+    if (x < 1e15) {
+        std::snprintf(buf.data(), buf.size(), "%.*f", decimals, x);
+    } else {
+        std::snprintf(buf.data(), buf.size(), "%.3g", x);
+    }
+    return buf.data();
+}
+
+std::string join(std::span<const char* const> names, bool quote) {
+    std::string out;
+    for (std::size_t i = 0; i < names.size(); ++i) {
+        if (i > 0) out += ", ";
+        out += quote ? in_quotes(names[i]) : std::string(names[i]);
+    }
+    return out;
+}
+
+std::string lower(std::string_view s) {
+    std::string out(s);
+    for (char& c : out) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    return out;
+}
+
+/// Optimal string alignment distance (Levenshtein plus adjacent transpositions), ignoring
+/// case: "endtiem" and "End_Time" are both one or two edits from "end_time".
+std::size_t edit_distance(std::string_view a_in, std::string_view b_in) {
+    const std::string a = lower(a_in), b = lower(b_in);
+    std::vector<std::vector<std::size_t>> d(a.size() + 1, std::vector<std::size_t>(b.size() + 1));
+    for (std::size_t i = 0; i <= a.size(); ++i) d[i][0] = i;
+    for (std::size_t j = 0; j <= b.size(); ++j) d[0][j] = j;
+    for (std::size_t i = 1; i <= a.size(); ++i) {
+        for (std::size_t j = 1; j <= b.size(); ++j) {
+            const std::size_t cost = a[i - 1] == b[j - 1] ? 0 : 1;
+            d[i][j] = std::min({d[i - 1][j] + 1, d[i][j - 1] + 1, d[i - 1][j - 1] + cost});
+            if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1]) {
+                d[i][j] = std::min(d[i][j], d[i - 2][j - 2] + 1);
+            }
+        }
+    }
+    return d[a.size()][b.size()];
+}
+
+/// " (did you mean "x"?)" for the closest name within a third of its length, else "".
+std::string suggestion(std::string_view found, std::span<const char* const> names) {
+    const char* best = nullptr;
+    std::size_t best_distance = std::numeric_limits<std::size_t>::max();
+    for (const char* name : names) {
+        const std::size_t limit = std::max<std::size_t>(1, std::string_view(name).size() / 3);
+        const std::size_t d = edit_distance(found, name);
+        if (d <= limit && d < best_distance) {
+            best = name;
+            best_distance = d;
+        }
+    }
+    return best ? " (did you mean " + in_quotes(best) + "?)" : std::string();
+}
+
+// ---- JSON text -> document, with positions and paths for every kind of failure. ----
+
+/// Builds the document like nlohmann's DOM parser but knows the JSON path of the value being
+/// read, so duplicate keys (which nlohmann silently overwrites) and numbers that overflow a
+/// double are reported at their path.
+class DomBuilder final : public json::json_sax_t {
+  public:
+    explicit DomBuilder(json& root) : m_root(root) {}
+
+    bool null() override { return insert(nullptr); }
+    bool boolean(bool v) override { return insert(v); }
+    bool number_integer(number_integer_t v) override { return insert(v); }
+    bool number_unsigned(number_unsigned_t v) override { return insert(v); }
+    bool number_float(number_float_t v, const string_t& /*text*/) override { return insert(v); }
+    bool string(string_t& v) override { return insert(std::move(v)); }
+    bool binary(binary_t& /*v*/) override { return false; }  // not produced by JSON text
+    bool start_object(std::size_t /*elements*/) override { return open(json::object()); }
+    bool start_array(std::size_t /*elements*/) override { return open(json::array()); }
+    bool end_object() override { return close(); }
+    bool end_array() override { return close(); }
+
+    bool key(string_t& k) override {
+        if (m_stack.back().value->contains(k)) {
+            duplicate_key = k;
+            error_path = child(m_stack.back().path, k);
+            return false;
+        }
+        m_key = k;
+        return true;
+    }
+
+    bool parse_error(std::size_t position, const std::string& last_token,
+                     const json::exception& ex) override {
+        error_position = position;
+        error_id = ex.id;
+        error_what = ex.what();
+        error_token = last_token;
+        error_path = value_path();
+        return false;
+    }
+
+    std::optional<std::string> duplicate_key;
+    std::string error_path;
+    std::size_t error_position = 0;
+    int error_id = 0;
+    std::string error_what, error_token;
+
+  private:
+    struct Frame {
+        json* value;
+        std::string path;
+    };
+
+    std::string value_path() const {
+        if (m_stack.empty()) return "";
+        const Frame& top = m_stack.back();
+        return top.value->is_array() ? child(top.path, top.value->size()) : child(top.path, m_key);
+    }
+
+    json* place(json v) {
+        if (m_stack.empty()) {
+            m_root = std::move(v);
+            return &m_root;
+        }
+        json& top = *m_stack.back().value;
+        if (top.is_array()) {
+            top.push_back(std::move(v));
+            return &top.back();
+        }
+        json& slot = top[m_key];
+        slot = std::move(v);
+        return &slot;
+    }
+
+    template <class V>
+    bool insert(V&& v) {
+        place(json(std::forward<V>(v)));
+        return true;
+    }
+
+    bool open(json v) {
+        std::string path = value_path();
+        json* p = place(std::move(v));
+        m_stack.push_back({p, std::move(path)});
+        return true;
+    }
+
+    bool close() {
+        m_stack.pop_back();
+        return true;
+    }
+
+    json& m_root;
+    std::vector<Frame> m_stack;
+    std::string m_key;
+};
+
+/// 1-based line and column (in characters, not bytes) of byte offset `offset`.
+std::pair<std::size_t, std::size_t> line_column(const std::string& text, std::size_t offset) {
+    std::size_t line = 1, column = 1;
+    for (std::size_t i = 0; i < offset && i < text.size(); ++i) {
+        if (text[i] == '\n') {
+            ++line;
+            column = 1;
+        } else if ((static_cast<unsigned char>(text[i]) & 0xC0) != 0x80) {
+            ++column;
+        }
+    }
+    return {line, column};
+}
+
+bool is_word_char(char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) || c == '_';
+}
+
+/// Start of the complete token that ends at `last` (nlohmann reports the position after it).
+std::size_t token_start(const std::string& text, std::size_t last) {
+    if (last >= text.size()) return last;
+    if (text[last] == '"') {  // back to the opening quote: one not escaped by a backslash
+        for (std::size_t k = last; k-- > 0 && text[k] != '\n';) {
+            std::size_t backslashes = 0;
+            while (backslashes < k && text[k - 1 - backslashes] == '\\') ++backslashes;
+            if (text[k] == '"' && backslashes % 2 == 0) return k;
+        }
+        return last;
+    }
+    std::size_t k = last;
+    while (k > 0 && (is_word_char(text[k - 1]) ||
+                     std::string_view(".+-").find(text[k - 1]) != std::string_view::npos)) {
+        --k;
+    }
+    return is_word_char(text[last]) ? k : last;
+}
+
+/// A short reason for a syntax error, and the byte offset it is about: nlohmann's own reason
+/// without its prefix and its "last read" echo (which can hold half a UTF-8 sequence), or a
+/// plainer one for the common mistakes.
+std::string syntax_reason(const std::string& text, std::size_t& offset, const std::string& what) {
+    std::string reason = what;
+    if (const auto dash = reason.find(" - "); dash != std::string::npos) {
+        reason = reason.substr(dash + 3);
+    }
+    if (const auto echo = reason.find("; last read: '"); echo != std::string::npos) {
+        const auto rest = reason.rfind("'; expected ");
+        if (rest != std::string::npos && rest > echo) {
+            reason.erase(echo, rest + 1 - echo);
+        } else {
+            reason.erase(echo);
+        }
+    }
+    // After a member or an element, nlohmann names only the closing bracket as expected.
+    for (const char* close : {"'}'", "']'"}) {
+        const std::string tail = std::string("; expected ") + close;
+        if (reason.ends_with(tail)) reason.insert(reason.size() - 3, "',' or ");
+    }
+    const bool at_end = offset >= text.size();
+    if (reason.starts_with("unexpected ") && !at_end) offset = token_start(text, offset);
+    if (reason.starts_with("unexpected end of input")) {
+        if (text.find_first_not_of(" \t\r\n") == std::string::npos) {
+            return "the file is empty; expected a JSON object";
+        }
+        reason.replace(0, 23, "unexpected end of file");
+    }
+    if (reason.find("ill-formed UTF-8") != std::string::npos && !at_end &&
+        (static_cast<unsigned char>(text[offset]) & 0x80) == 0) {
+        // Detected on the byte after an incomplete sequence: point at the sequence's start.
+        while (offset > 0 && (static_cast<unsigned char>(text[offset - 1]) & 0xC0) == 0x80)
+            --offset;
+        if (offset > 0 && (static_cast<unsigned char>(text[offset - 1]) & 0xC0) == 0xC0) --offset;
+        return "invalid UTF-8 in a string (the file must be UTF-8)";
+    }
+
+    const char c = at_end ? '\0' : text[offset];
+    if (c == '/') return "comments are not allowed in JSON";
+    if (c == '\'') return "strings must be in double quotes";
+    if (reason.find("; expected end of input") != std::string::npos) {
+        return "unexpected text after the end of the top-level value";
+    }
+    if (c == '}' || c == ']') {
+        std::size_t p = offset;
+        while (p > 0 && std::isspace(static_cast<unsigned char>(text[p - 1]))) --p;
+        if (p > 0 && text[p - 1] == ',') {
+            offset = p - 1;
+            return std::string("trailing comma before '") + c + "' (not allowed in JSON)";
+        }
+    }
+    if (reason.starts_with("invalid literal")) {
+        if (c == '.' || c == '+') return "invalid number (JSON numbers start with a digit or '-')";
+        std::size_t begin = offset, end = offset;
+        while (end < text.size() && is_word_char(text[end])) ++end;
+        while (begin > 0 && is_word_char(text[begin - 1])) --begin;
+        const std::string word = text.substr(begin, end - begin);
+        const std::string w = lower(word);
+        if (w == "nan" || w == "inf" || w == "infinity") {
+            return "NaN and Infinity are not JSON numbers";
+        }
+        if (!word.empty()) {
+            offset = begin;
+            return "invalid word " + in_quotes(truncate(word, 40)) +
+                   " (strings need double quotes; the literals are true, false and null)";
+        }
+    }
+    if (reason.find("control character U+000A") != std::string::npos) {
+        return "line break inside a string (missing closing quote?)";
+    }
+    return reason;
+}
+
+json parse_document(const std::string& text, const std::string& file) {
+    json doc;
+    DomBuilder builder(doc);
+    if (json::sax_parse(text, &builder, json::input_format_t::json, /*strict=*/true,
+                        /*ignore_comments=*/false)) {
+        return doc;
+    }
+    if (builder.duplicate_key) {
+        throw SceneError(file, builder.error_path,
+                         "duplicate key " + in_quotes(*builder.duplicate_key),
+                         "each key at most once per object");
+    }
+    if (builder.error_id == 406) {  // out_of_range.406: the number overflows a double
+        throw SceneError(file, shown(builder.error_path), truncate(builder.error_token),
+                         "a finite number (this one overflows a double)");
+    }
+    // nlohmann reports the count of characters read: the offending one is the last of them.
+    std::size_t offset = builder.error_position > 0 ? builder.error_position - 1 : 0;
+    const std::string reason = syntax_reason(text, offset, builder.error_what);
+    const auto [line, column] = line_column(text, offset);
+    throw InputError(file + ": JSON syntax error at line " + std::to_string(line) + ", column " +
+                     std::to_string(column) + ": " + reason);
+}
+
+// ---- Command-line overrides. ----
+
+/// Splits a JSON pointer into unescaped tokens; throws InputError for "~" not followed by 0/1.
+std::vector<std::string> pointer_tokens(const std::string& pointer, const std::string& file) {
+    std::vector<std::string> tokens;
+    if (pointer.empty()) return tokens;
+    if (pointer[0] != '/') {
+        throw InputError(file + ": cannot apply override " + in_quotes(pointer) +
+                         ": expected a JSON pointer starting with '/'");
+    }
+    std::string token;
+    for (std::size_t i = 1; i <= pointer.size(); ++i) {
+        if (i == pointer.size() || pointer[i] == '/') {
+            tokens.push_back(token);
+            token.clear();
+        } else if (pointer[i] == '~') {
+            if (i + 1 < pointer.size() && (pointer[i + 1] == '0' || pointer[i + 1] == '1')) {
+                token += pointer[i + 1] == '0' ? '~' : '/';
+                ++i;
+            } else {
+                throw InputError(file + ": cannot apply override " + in_quotes(pointer) +
+                                 ": '~' must be followed by 0 or 1 in a JSON pointer");
+            }
+        } else {
+            token += pointer[i];
+        }
+    }
+    return tokens;
+}
+
+/// Sets `value` at `tokens` in `doc`, creating objects on the way; returns the canonical path.
+std::string apply_override(json& doc, const std::vector<std::string>& tokens, const json& value,
+                           const std::string& file) {
+    json* cur = &doc;
+    std::string path;
+    for (const std::string& t : tokens) {
+        if (cur->is_null()) *cur = json::object();
+        if (cur->is_object()) {
+            cur = &(*cur)[t];
+            path = child(path, t);
+        } else if (cur->is_array()) {
+            const bool digits = !t.empty() && std::all_of(t.begin(), t.end(), [](char c) {
+                return std::isdigit(static_cast<unsigned char>(c));
+            }) && (t.size() == 1 || t[0] != '0');
+            const std::size_t index = digits && t.size() < 10 ? std::stoul(t) : SIZE_MAX;
+            if (index >= cur->size()) {
+                throw SceneError(file, child(path, t), "nothing",
+                                 cur->empty() ? std::string("an element, but the array is empty "
+                                                            "(set on the command line)")
+                                              : "an array index from 0 to " +
+                                                    std::to_string(cur->size() - 1) +
+                                                    " (set on the command line)");
+            }
+            cur = &(*cur)[index];
+            path = child(path, index);
+        } else {
+            throw SceneError(file, shown(path), dump(*cur),
+                             "an object holding " + in_quotes(t) + " (set on the command line)");
+        }
+    }
+    *cur = value;
+    return path;
+}
+
+// ---- Validation: document -> Scene. ----
+
+/// Allowed range of a number; open bounds by default ("> 0").
+struct Range {
+    double lo = -std::numeric_limits<double>::infinity();
+    bool lo_inclusive = false;
+    double hi = std::numeric_limits<double>::infinity();
+    bool hi_inclusive = false;
+    const char* unit = nullptr;
+
+    bool contains(double x) const {
+        return std::isfinite(x) && (lo_inclusive ? x >= lo : x > lo) &&
+               (hi_inclusive ? x <= hi : x < hi);
+    }
+    std::string describe() const {
+        std::string s = "a number";
+        const bool has_lo = std::isfinite(lo), has_hi = std::isfinite(hi);
+        if (has_lo) s += (lo_inclusive ? " >= " : " > ") + fmt_num(lo);
+        if (has_hi)
+            s += std::string(has_lo ? " and" : "") + (hi_inclusive ? " <= " : " < ") + fmt_num(hi);
+        if (unit) s += std::string(" (") + unit + ")";
+        return s;
+    }
+};
+
+Range positive(const char* unit) {
+    return {0.0, false, Range{}.hi, false, unit};
+}
+Range non_negative(const char* unit) {
+    return {0.0, true, Range{}.hi, false, unit};
+}
+Range any_number(const char* unit) {
+    return {Range{}.lo, false, Range{}.hi, false, unit};
+}
+Range coefficient() {
+    return {0.0, false, 1.0, true, nullptr};
+}
+
+bool inside(const Aabb& inner, const Aabb& outer) {
+    return (inner.min.array() >= outer.min.array()).all() &&
+           (inner.max.array() <= outer.max.array()).all();
+}
+
+bool overlaps(const Aabb& a, const Aabb& b) {  // shared faces do not count
+    return (a.min.array() < b.max.array()).all() && (b.min.array() < a.max.array()).all();
+}
+
+bool overlaps(const Aabb& box, const Vec3d& center, double radius) {
+    const Vec3d closest = center.cwiseMax(box.min).cwiseMin(box.max);
+    return (closest - center).squaredNorm() < radius * radius;
+}
+
+double surface_area(const Aabb& box) {
+    const Vec3d e = box.extent();
+    return 2.0 * (e.x() * e.y() + e.y() * e.z() + e.z() * e.x());
+}
+
+/// Cells per axis as lattice_dims counts them, in double so a tiny radius cannot overflow int.
+Vec3d lattice_cells(const Aabb& box, double spacing) {
+    Vec3d n;
+    for (int a = 0; a < 3; ++a) {
+        const double cells = (box.max[a] - box.min[a]) / spacing + 1e-6;
+        n[a] = cells > 0 ? std::floor(cells) : 0.0;
+    }
+    return n;
+}
+
+double lattice_count(const Aabb& box, double spacing) {
+    const Vec3d cells = lattice_cells(box, spacing);
+    if (cells.maxCoeff() < 1e9) {  // fits lattice_dims' int: use the engine's own count
+        const Eigen::Vector3i n = lattice_dims(box, spacing);
+        return static_cast<double>(n[0]) * n[1] * n[2];
+    }
+    return cells.prod();
+}
+
+/// A JSON value and its path.
+struct Node {
+    const json& value;
+    std::string path;
+
+    const json* find(const char* key) const {
+        const auto it = value.find(key);
+        return it == value.end() ? nullptr : &*it;
+    }
+    Node at(const json& v, const char* key) const { return {v, child(path, key)}; }
+};
+
+class Reader {
+  public:
+    Reader(const std::string& file, const json& doc, std::vector<std::string> cli_paths)
+        : m_file(file), m_doc(doc), m_cli(std::move(cli_paths)) {}
+
+    Scene read() const {
+        const Node root{m_doc, ""};
+        require_object(root, "an object (the scene)");
+        check_keys(root, k_top_keys);
+
+        Scene s;
+        const json* name = root.find("name");
+        if (!name) fail("/name", "nothing", k_name_expected);
+        s.name = read_name(root.at(*name, "name"));
+        if (const json* d = root.find("description"); d && !d->is_string()) {
+            fail("/description", dump(*d), "a string");
+        }
+        if (const json* v = root.find("simulation")) {
+            read_simulation(root.at(*v, "simulation"), s.simulation);
+        }
+        if (const json* v = root.find("domain")) {
+            const Node n = root.at(*v, "domain");
+            require_object(n, "an object with min and max");
+            check_keys(n, k_box_keys);
+            s.domain = read_box(n);
+        }
+        if (const json* v = root.find("fluid")) read_fluid(root.at(*v, "fluid"), s.fluid);
+        if (const json* v = root.find("fluid_blocks")) {
+            const Node n = root.at(*v, "fluid_blocks");
+            require_array(n, "an array of fluid blocks");
+            for (std::size_t i = 0; i < v->size(); ++i) {
+                s.fluid_blocks.push_back(read_block({(*v)[i], child(n.path, i)}));
+            }
+        }
+        if (const json* v = root.find("boundaries")) {
+            const Node n = root.at(*v, "boundaries");
+            require_array(n, "an array of boundaries");
+            for (std::size_t i = 0; i < v->size(); ++i) {
+                s.boundaries.push_back(read_boundary({(*v)[i], child(n.path, i)}));
+            }
+        }
+        if (const json* v = root.find("output")) read_output(root.at(*v, "output"), s.output);
+
+        cross_check(s);
+        return s;
+    }
+
+  private:
+    // -- Failing. The message says "(set on the command line)" when any path involved in the
+    // -- error was set or replaced by an override, or holds a value that was.
+    bool from_cli(const std::string& path) const {
+        return std::any_of(m_cli.begin(), m_cli.end(), [&](const std::string& o) {
+            return path == o || path.starts_with(o + "/") ||
+                   (!path.empty() && o.starts_with(path + "/"));
+        });
+    }
+
+    [[noreturn]] void fail_at(const std::string& path, const std::string& found,
+                              std::string expected,
+                              std::initializer_list<std::string> involved) const {
+        if (std::any_of(involved.begin(), involved.end(),
+                        [&](const std::string& p) { return from_cli(p); })) {
+            expected += " (set on the command line)";
+        }
+        throw SceneError(m_file, shown(path), found, std::move(expected));
+    }
+
+    [[noreturn]] void fail(const std::string& path, const std::string& found,
+                           std::string expected) const {
+        fail_at(path, found, std::move(expected), {path});
+    }
+
+    std::string dump_at(const std::string& path) const {
+        const json::json_pointer p(path);
+        return m_doc.contains(p) ? dump(m_doc.at(p)) : std::string("nothing");
+    }
+
+    // -- Generic readers.
+    void require_object(const Node& n, const char* what) const {
+        if (!n.value.is_object()) fail(n.path, dump(n.value), what);
+    }
+    void require_array(const Node& n, const char* what) const {
+        if (!n.value.is_array()) fail(n.path, dump(n.value), what);
+    }
+
+    void check_keys(const Node& n, std::span<const char* const> keys,
+                    const std::string& context = "") const {
+        for (const auto& item : n.value.items()) {
+            const std::string& key = item.key();
+            if (std::none_of(keys.begin(), keys.end(), [&](const char* k) { return key == k; })) {
+                fail_at(n.path, "unknown key " + in_quotes(key) + context,
+                        "one of: " + join(keys, false) + suggestion(key, keys),
+                        {child(n.path, key)});
+            }
+        }
+    }
+
+    double number(const Node& n, const Range& range) const {
+        if (!n.value.is_number()) fail(n.path, dump(n.value), range.describe());
+        const double x = n.value.get<double>();
+        if (!range.contains(x)) fail(n.path, dump(n.value), range.describe());
+        return x;
+    }
+
+    void read_number(const Node& obj, const char* key, const Range& range, double& out) const {
+        if (const json* v = obj.find(key)) out = number(obj.at(*v, key), range);
+    }
+
+    Vec3d vec3(const Node& n, const char* unit) const {
+        const std::string what = std::string("an array of 3 numbers (") + unit + ")";
+        if (!n.value.is_array() || n.value.size() != 3) fail(n.path, dump(n.value), what);
+        Vec3d out;
+        for (std::size_t i = 0; i < 3; ++i) {
+            out[static_cast<Eigen::Index>(i)] =
+                number({n.value[i], child(n.path, i)}, any_number(unit));
+        }
+        return out;
+    }
+
+    Vec3d required_vec3(const Node& obj, const char* key, const char* unit) const {
+        const json* v = obj.find(key);
+        if (!v) {
+            fail(child(obj.path, key), "nothing",
+                 std::string("an array of 3 numbers (") + unit + ")");
+        }
+        return vec3(obj.at(*v, key), unit);
+    }
+
+    /// Index of the string in `names`, or an error listing them (with a suggestion).
+    std::size_t pick(const Node& n, std::span<const char* const> names) const {
+        const std::string expected = "one of " + join(names, true);
+        if (!n.value.is_string()) fail(n.path, dump(n.value), expected);
+        const std::string& s = n.value.get_ref<const std::string&>();
+        for (std::size_t i = 0; i < names.size(); ++i) {
+            if (s == names[i]) return i;
+        }
+        fail(n.path, dump(n.value), expected + suggestion(s, names));
+    }
+
+    template <class E, std::size_t N>
+    E pick_enum(const Node& n, const std::array<E, N>& values) const {
+        std::array<const char*, N> names{};
+        for (std::size_t i = 0; i < N; ++i) names[i] = to_string(values[i]);
+        return values[pick(n, names)];
+    }
+
+    // -- Sections.
+    std::string read_name(const Node& n) const {
+        const char* what = k_name_expected;
+        if (!n.value.is_string()) fail(n.path, dump(n.value), what);
+        const std::string& s = n.value.get_ref<const std::string&>();
+        if (s.empty() || s == "." || s == ".." ||
+            s.find_first_of(std::string("/\\\0", 3)) != std::string::npos) {
+            fail(n.path, dump(n.value), what);
+        }
+        return s;
+    }
+
+    void read_simulation(const Node& n, SimulationParams& p) const {
+        require_object(n, "an object");
+        check_keys(n, k_simulation_keys);
+        if (const json* v = n.find("method")) p.method = pick_enum(n.at(*v, "method"), k_methods);
+        if (const json* v = n.find("stepping")) read_stepping(n.at(*v, "stepping"), p.stepping);
+        read_number(n, "end_time", positive("seconds"), p.end_time);
+        read_number(n, "frame_rate", non_negative("frames per simulated second; 0 writes none"),
+                    p.frame_rate);
+        read_number(n, "scale", {0.0, false, 1000.0, true, "particle-count multiplier"}, p.scale);
+        if (const json* v = n.find("gravity")) p.gravity = vec3(n.at(*v, "gravity"), "m/s^2");
+        if (const json* v = n.find("sort_interval")) {
+            const Node s = n.at(*v, "sort_interval");
+            const char* what = "an integer >= 1 (steps)";
+            if (!v->is_number_integer()) fail(s.path, dump(*v), what);
+            const bool in_range =
+                v->is_number_unsigned()
+                    ? v->get<std::uint64_t>() >= 1 && v->get<std::uint64_t>() <= INT_MAX
+                    : v->get<std::int64_t>() >= 1 && v->get<std::int64_t>() <= INT_MAX;
+            if (!in_range) {
+                fail(s.path, dump(*v), what);
+            }
+            p.sort_interval = v->get<int>();
+        }
+    }
+
+    void read_stepping(const Node& n, SteppingParams& p) const {
+        require_object(n, "an object");
+        check_keys(n, k_stepping_keys);
+        if (const json* v = n.find("mode")) p.mode = pick_enum(n.at(*v, "mode"), k_modes);
+        read_number(n, "dt", positive("seconds"), p.dt);
+        read_number(n, "lambda_v", coefficient(), p.lambda_v);
+        read_number(n, "lambda_f", coefficient(), p.lambda_f);
+        if (const json* v = n.find("acoustic")) {
+            if (!v->is_boolean()) fail(child(n.path, "acoustic"), dump(*v), "true or false");
+            p.acoustic = v->get<bool>();
+        }
+        read_number(n, "lambda_c", coefficient(), p.lambda_c);
+        read_number(n, "dt_max", positive("seconds"), p.dt_max);
+        read_number(n, "dt_min", positive("seconds"), p.dt_min);
+        if (!(p.dt_min < p.dt_max)) {
+            const std::string min_path = child(n.path, "dt_min");
+            fail_at(min_path, n.find("dt_min") ? dump(*n.find("dt_min")) : fmt_num(p.dt_min),
+                    "a number > 0 and < dt_max = " + fmt_num(p.dt_max) + " (seconds)",
+                    {min_path, child(n.path, "dt_max")});
+        }
+    }
+
+    void read_fluid(const Node& n, FluidParams& p) const {
+        require_object(n, "an object");
+        check_keys(n, k_fluid_keys);
+        read_number(n, "rest_density", positive("kg/m^3"), p.rest_density);
+        read_number(n, "particle_radius", positive("metres"), p.particle_radius);
+        read_number(n, "viscosity", non_negative("artificial viscosity alpha"), p.viscosity);
+        if (const json* v = n.find("speed_of_sound")) {
+            p.speed_of_sound = number(n.at(*v, "speed_of_sound"), positive("m/s"));
+        }
+        read_number(n, "density_fluctuation", {0.0, false, 0.2, true, "fraction of rest density"},
+                    p.density_fluctuation);
+    }
+
+    Aabb read_box(const Node& n) const {
+        Aabb box;
+        box.min = required_vec3(n, "min", "metres");
+        box.max = required_vec3(n, "max", "metres");
+        if (!(box.min.array() < box.max.array()).all()) {
+            const std::string max_path = child(n.path, "max");
+            fail_at(max_path, dump_at(max_path),
+                    "a point above min " + fmt_vec(box.min) + " on every axis (metres)",
+                    {max_path, child(n.path, "min")});
+        }
+        return box;
+    }
+
+    FluidBlock read_block(const Node& n) const {
+        require_object(n, "an object with min, max and optionally velocity");
+        check_keys(n, k_block_keys);
+        FluidBlock b;
+        b.box = read_box(n);
+        if (const json* v = n.find("velocity")) b.velocity = vec3(n.at(*v, "velocity"), "m/s");
+        return b;
+    }
+
+    BoundaryDesc read_boundary(const Node& n) const {
+        require_object(n, "an object with a type");
+        BoundaryDesc b;
+        const json* type = n.find("type");
+        if (!type) {
+            std::array<const char*, k_shapes.size()> names{};
+            for (std::size_t i = 0; i < names.size(); ++i) names[i] = to_string(k_shapes[i]);
+            fail(child(n.path, "type"), "nothing", "one of " + join(names, true));
+        }
+        b.shape = pick_enum(n.at(*type, "type"), k_shapes);
+        const std::string context = " for a " + in_quotes(to_string(b.shape)) + " boundary";
+        if (b.shape == BoundaryShape::Sphere) {
+            check_keys(n, k_sphere_boundary_keys, context);
+            b.center = required_vec3(n, "center", "metres");
+            const json* r = n.find("radius");
+            if (!r) fail(child(n.path, "radius"), "nothing", positive("metres").describe());
+            b.radius = number(n.at(*r, "radius"), positive("metres"));
+        } else {
+            check_keys(n, k_boxlike_boundary_keys, context);
+            b.box = read_box(n);
+        }
+        return b;
+    }
+
+    void read_output(const Node& n, OutputParams& p) const {
+        require_object(n, "an object");
+        check_keys(n, k_output_keys);
+        if (const json* v = n.find("format")) {
+            const std::size_t i = pick(n.at(*v, "format"), k_formats);
+            p.format = static_cast<FrameFormat>(i);
+        }
+        if (const json* v = n.find("attributes")) {
+            const Node a = n.at(*v, "attributes");
+            require_array(a,
+                          ("an array of strings, each one of " + join(k_attributes, true)).c_str());
+            p.attributes.clear();
+            for (std::size_t i = 0; i < v->size(); ++i) {
+                const Node e{(*v)[i], child(a.path, i)};
+                const char* name = k_attributes[pick(e, k_attributes)];
+                if (std::find(p.attributes.begin(), p.attributes.end(), name) !=
+                    p.attributes.end()) {
+                    fail(e.path, dump(e.value), "each attribute at most once");
+                }
+                p.attributes.emplace_back(name);
+            }
+        }
+    }
+
+    // -- Checks across sections, on the parsed values.
+    void cross_check(const Scene& s) const {
+        if (s.fluid_blocks.empty()) {
+            fail("/fluid_blocks", dump_at("/fluid_blocks"),
+                 "at least one fluid block (there are no emitters yet, so the scene would "
+                 "simulate nothing)");
+        }
+        const double spacing = 2.0 * s.particle_radius();
+        const std::string radius_path = "/fluid/particle_radius", scale_path = "/simulation/scale";
+        for (std::size_t i = 0; i < s.fluid_blocks.size(); ++i) {
+            const Aabb& box = s.fluid_blocks[i].box;
+            const std::string path = child("/fluid_blocks", i);
+            if (s.domain && !inside(box, *s.domain)) {
+                fail_at(path, dump_at(path),
+                        "a block inside the domain (min " + fmt_vec(s.domain->min) + ", max " +
+                            fmt_vec(s.domain->max) + ")",
+                        {path, "/domain"});
+            }
+            for (std::size_t j = 0; j < s.boundaries.size(); ++j) {
+                const BoundaryDesc& b = s.boundaries[j];
+                const std::string bpath = child("/boundaries", j);
+                const std::string where = " " + bpath + " (min " + fmt_vec(b.box.min) + ", max " +
+                                          fmt_vec(b.box.max) + ")";
+                if (b.shape == BoundaryShape::Container && !inside(box, b.box)) {
+                    fail_at(path, dump_at(path), "a block inside the container" + where,
+                            {path, bpath});
+                }
+                if (b.shape == BoundaryShape::Box && overlaps(box, b.box)) {
+                    fail_at(path, dump_at(path), "a block clear of the box obstacle" + where,
+                            {path, bpath});
+                }
+                if (b.shape == BoundaryShape::Sphere && overlaps(box, b.center, b.radius)) {
+                    fail_at(path, dump_at(path),
+                            "a block clear of the sphere " + bpath + " (center " +
+                                fmt_vec(b.center) + ", radius " + fmt_num(b.radius) + ")",
+                            {path, bpath});
+                }
+            }
+            if (lattice_cells(box, spacing).minCoeff() < 1.0) {
+                fail_at(path, dump_at(path),
+                        "a block at least " + fmt_computed(spacing) +
+                            " m thick on every axis, to hold one particle (spacing = 2 x "
+                            "particle radius after scale)",
+                        {path, radius_path, scale_path});
+            }
+        }
+
+        // Memory estimate: ~400 bytes per fluid particle (all columns, neighbour lists), ~100
+        // per boundary particle sampled at spacing 2 r on the boundary surfaces.
+        double fluid_count = 0.0, area = 0.0;
+        for (const FluidBlock& b : s.fluid_blocks) fluid_count += lattice_count(b.box, spacing);
+        for (const BoundaryDesc& b : s.boundaries) {
+            area += b.shape == BoundaryShape::Sphere ? 4.0 * std::numbers::pi * b.radius * b.radius
+                                                     : surface_area(b.box);
+        }
+        const double bytes = fluid_count * 400.0 + area / (spacing * spacing) * 100.0;
+        const double physical = static_cast<double>(sysconf(_SC_PHYS_PAGES)) *
+                                static_cast<double>(sysconf(_SC_PAGE_SIZE));
+        if (physical > 0 && bytes > physical) {
+            const std::string found = m_doc.contains(json::json_pointer(radius_path))
+                                          ? dump_at(radius_path)
+                                          : fmt_num(s.fluid.particle_radius);
+            fail_at(radius_path, found,
+                    "a larger radius: the scene would need about " +
+                        fmt_large(bytes / (1024.0 * 1024.0 * 1024.0), 1) + " GiB for " +
+                        fmt_large(fluid_count, 0) +
+                        " fluid particles, more than this machine's physical memory",
+                    {radius_path, scale_path});
+        }
+    }
+
+    const std::string& m_file;
+    const json& m_doc;
+    std::vector<std::string> m_cli;
+};
+
+}  // namespace
+
+Scene parse_scene(const std::string& text, const std::string& file,
+                  const std::vector<std::pair<std::string, nlohmann::json>>& overrides) {
+    json doc = parse_document(text, file);
+    std::vector<std::string> cli_paths;
+    for (const auto& [pointer, value] : overrides) {
+        cli_paths.push_back(apply_override(doc, pointer_tokens(pointer, file), value, file));
+    }
+    return Reader(file, doc, std::move(cli_paths)).read();
+}
+
+Scene load_scene(const std::filesystem::path& file,
+                 const std::vector<std::pair<std::string, nlohmann::json>>& overrides) {
+    const std::string name = file.string();
+    const auto cannot = [&](int err) {
+        return InputError(name + ": cannot open scene file (" +
+                          std::error_code(err, std::generic_category()).message() + ")");
+    };
+    errno = 0;
+    const std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(std::fopen(name.c_str(), "rb"),
+                                                            &std::fclose);
+    if (!f) throw cannot(errno);
+    std::string text;
+    std::array<char, 1 << 16> buf{};
+    std::size_t n = 0;
+    while ((n = std::fread(buf.data(), 1, buf.size(), f.get())) > 0) text.append(buf.data(), n);
+    if (std::ferror(f.get())) throw cannot(errno);  // e.g. EISDIR for a directory
+
+    Scene scene = parse_scene(text, name, overrides);
+    scene.source = file;
+    return scene;
+}
+
+std::pair<std::string, nlohmann::json> parse_override(const std::string& assignment) {
+    const auto trim = [](std::string s) {
+        const auto first = s.find_first_not_of(" \t");
+        if (first == std::string::npos) return std::string();
+        return s.substr(first, s.find_last_not_of(" \t") - first + 1);
+    };
+    const std::string usage = "--set " + in_quotes(assignment) + ": expected path=value, e.g. " +
+                              "simulation.stepping.mode=global";
+    const auto eq = assignment.find('=');
+    if (eq == std::string::npos) throw InputError(usage);
+    const std::string lhs = trim(assignment.substr(0, eq));
+    const std::string rhs = trim(assignment.substr(eq + 1));
+    if (lhs.empty()) throw InputError(usage + " (the path is empty)");
+
+    std::string pointer;
+    if (lhs[0] == '/') {
+        pointer = lhs;  // already a JSON pointer
+    } else {
+        std::size_t start = 0;
+        while (true) {
+            const auto dot = lhs.find('.', start);
+            const std::string key =
+                lhs.substr(start, dot == std::string::npos ? std::string::npos : dot - start);
+            if (key.empty()) throw InputError(usage + " (empty key in the path)");
+            pointer += '/';
+            pointer += escape_token(key);
+            if (dot == std::string::npos) break;
+            start = dot + 1;
+        }
+    }
+
+    json value;
+    try {
+        value = json::parse(rhs, nullptr, /*allow_exceptions=*/true, /*ignore_comments=*/false);
+    } catch (const json::parse_error&) {
+        value = rhs;  // a bare word: `mode=global`
+    } catch (const json::out_of_range&) {
+        throw InputError("--set " + in_quotes(assignment) + ": the number overflows a double");
+    }
+    return {pointer, value};
+}
+
+}  // namespace sph
