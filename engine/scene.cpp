@@ -74,7 +74,7 @@ constexpr std::array<const char*, 8> k_stepping_keys{"mode",     "dt",       "la
 constexpr std::array<const char*, 5> k_fluid_keys{"rest_density", "particle_radius", "viscosity",
                                                   "speed_of_sound", "density_fluctuation"};
 constexpr std::array<const char*, 2> k_box_keys{"min", "max"};
-constexpr std::array<const char*, 3> k_block_keys{"min", "max", "velocity"};
+constexpr std::array<const char*, 4> k_block_keys{"min", "max", "velocity", "hydrostatic"};
 constexpr std::array<const char*, 3> k_boxlike_boundary_keys{"type", "min", "max"};
 constexpr std::array<const char*, 3> k_sphere_boundary_keys{"type", "center", "radius"};
 constexpr std::array<const char*, 2> k_output_keys{"format", "attributes"};
@@ -834,6 +834,10 @@ class Reader {
         FluidBlock b;
         b.box = read_box(n);
         if (const json* v = n.find("velocity")) b.velocity = vec3(n.at(*v, "velocity"), "m/s");
+        if (const json* v = n.find("hydrostatic")) {
+            if (!v->is_boolean()) fail(child(n.path, "hydrostatic"), dump(*v), "true or false");
+            b.hydrostatic = v->get<bool>();
+        }
         return b;
     }
 

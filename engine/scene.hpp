@@ -64,6 +64,10 @@ struct FluidParams {
 struct FluidBlock {
     Aabb box;
     Vec3d velocity{0, 0, 0};  ///< m/s, initial.
+    /// Start at hydrostatic equilibrium: the lattice is compressed along gravity so that the
+    /// summation density at depth d is the Tait density of pressure rho0 g d. Otherwise the
+    /// column starts at rho0 everywhere and rings acoustically (period 4 H / c_s).
+    bool hydrostatic = true;
 };
 
 enum class BoundaryShape { Container, Box, Sphere };

@@ -67,29 +67,22 @@ void initialise_world(World& w, const Scene& scene) {
     ph.mass = lattice_mass(w.kernel, ph.spacing, ph.rest_density);
     w.domain = scene.domain ? *scene.domain : default_domain(scene, 4 * r);
 
-    // Fluid particles.
+    // Fluid particles (positions are written once c_s is known: see the hydrostatic step).
     std::vector<Vec3d> xs;
     std::vector<Vec3d> vs;
-    for (const auto& block : scene.fluid_blocks) {
+    std::vector<std::size_t> block_of;
+    for (std::size_t bi = 0; bi < scene.fluid_blocks.size(); ++bi) {
+        const auto& block = scene.fluid_blocks[bi];
         auto pts = sample_block(block.box, 2 * r);
         xs.insert(xs.end(), pts.begin(), pts.end());
         vs.insert(vs.end(), pts.size(), block.velocity);
+        block_of.insert(block_of.end(), pts.size(), bi);
     }
     auto& fs = w.fluid.store;
     fs.add(comp::position);
     fs.add(comp::velocity);
     fs.add(comp::id);
     fs.resize(xs.size());
-    {
-        auto x = fs.get(comp::position);
-        auto v = fs.get(comp::velocity);
-        auto id = fs.get(comp::id);
-        for (std::size_t i = 0; i < xs.size(); ++i) {
-            x[i] = xs[i].cast<Real>();
-            v[i] = vs[i].cast<Real>();
-            id[i] = std::uint32_t(i);
-        }
-    }
 
     // Boundary particles (static: sampled once, at the fluid spacing r0 = 2 r = h / 2).
     std::vector<Vec3d> bx, bn;
@@ -136,6 +129,46 @@ void initialise_world(World& w, const Scene& scene) {
     ph.speed_of_sound = Real(scene.fluid.speed_of_sound ? *scene.fluid.speed_of_sound
                                                         : vref / std::sqrt(scene.fluid.density_fluctuation));
     ph.tait_b = ph.rest_density * ph.speed_of_sound * ph.speed_of_sound / Real(7);
+
+    // Hydrostatic start: keep each block's bottom layer and compress the lattice along gravity
+    // with dy'/dy = rho0 / rho(d), rho(d) = rho0 (1 + rho0 g d / B)^(1/7) the Tait density of
+    // the pressure rho0 g d at depth d below the block's top (He eq. 2 inverted).
+    if (g > 0) {
+        for (std::size_t bi = 0; bi < scene.fluid_blocks.size(); ++bi) {
+            const auto& block = scene.fluid_blocks[bi];
+            if (!block.hydrostatic) continue;
+            double top_b = -std::numeric_limits<double>::max(), bottom_b = std::numeric_limits<double>::max();
+            for (std::size_t i = 0; i < xs.size(); ++i)
+                if (block_of[i] == bi) {
+                    top_b = std::max(top_b, xs[i].dot(up) + r);
+                    bottom_b = std::min(bottom_b, xs[i].dot(up));
+                }
+            const double b_eos = double(ph.tait_b), rho0 = double(ph.rest_density);
+            auto compression = [&](double height) {  // rho0 / rho at this height
+                const double d = std::max(0.0, top_b - height);
+                return std::pow(1.0 + rho0 * g * d / b_eos, -1.0 / 7.0);
+            };
+            for (std::size_t i = 0; i < xs.size(); ++i) {
+                if (block_of[i] != bi) continue;
+                const double y = xs[i].dot(up);
+                const int steps = 16;  // midpoint rule; the integrand is smooth and near 1
+                double y_new = bottom_b;
+                for (int k = 0; k < steps; ++k)
+                    y_new += (y - bottom_b) / steps * compression(bottom_b + (k + 0.5) * (y - bottom_b) / steps);
+                xs[i] += (y_new - y) * up;
+            }
+        }
+    }
+    {
+        auto x = fs.get(comp::position);
+        auto v = fs.get(comp::velocity);
+        auto id = fs.get(comp::id);
+        for (std::size_t i = 0; i < xs.size(); ++i) {
+            x[i] = xs[i].cast<Real>();
+            v[i] = vs[i].cast<Real>();
+            id[i] = std::uint32_t(i);
+        }
+    }
 
     w.fluid_grid = UniformGrid(w.domain, ph.h);
     Aabb bbox = w.domain;
