@@ -9,7 +9,7 @@ inline Scene tank_scene(Vec3d fluid_max, Vec3d box_max, double r = 0.01) {
     Scene s;
     s.name = "test_tank";
     s.fluid.particle_radius = r;
-    s.fluid_blocks.push_back(FluidBlock{Aabb{Vec3d::Zero(), fluid_max}, Vec3d::Zero()});
+    s.fluid_blocks.push_back(FluidBlock{Aabb{Vec3d::Zero(), fluid_max}, Vec3d::Zero(), /*hydrostatic=*/false});
     BoundaryDesc b;
     b.shape = BoundaryShape::Container;
     b.box = Aabb{Vec3d::Zero(), box_max};
