@@ -11,7 +11,7 @@ namespace sph {
 Recorder::Recorder(std::filesystem::path dir, const Simulation& sim) : m_dir(std::move(dir)) {
     std::filesystem::create_directories(m_dir);
     std::ostringstream h;
-    h << "step,t,dt,updated,neighbours_per_particle,rho_err_avg,rho_err_max,v_max,a_max,wall_s";
+    h << "step,t,dt,updated,neighbours_per_particle,rho_err_avg,rho_err_max,v_max,a_max,collisions,wall_s";
     for (const auto& s : sim.graph().systems()) h << ",ms_" << s->name();
     h << '\n';
     m_csv = h.str();
@@ -38,12 +38,13 @@ void Recorder::after_step(const Simulation& sim) {
     std::ostringstream row;
     row << std::setprecision(9) << (s.step - 1) << ',' << s.t - s.dt << ',' << s.dt << ',' << s.updated << ','
         << (s.updated ? double(s.neighbour_pairs) / double(s.updated) : 0.0) << ',' << s.rho_err_avg << ','
-        << s.rho_err_max << ',' << s.v_max << ',' << s.a_max << ',' << wall;
+        << s.rho_err_max << ',' << s.v_max << ',' << s.a_max << ',' << s.collisions << ',' << wall;
     const auto& g = sim.graph();
     row << std::setprecision(4);
     for (std::size_t i = 0; i < g.systems().size(); ++i) row << ',' << g.last_seconds(i) * 1e3;
     row << '\n';
     m_csv += row.str();
+    m_collisions += s.collisions;
     const double rate = w.scene.simulation.frame_rate;
     if (rate > 0 && s.t >= m_next_frame_time - 1e-9) write_frame(sim);
 }
@@ -78,6 +79,7 @@ nlohmann::json Recorder::finish(const Simulation& sim, double wall_seconds, int 
                     {"speed_of_sound", w.physics.speed_of_sound},
                     {"fluid_height", w.physics.fluid_height}};
     j["frames"] = m_frame;
+    j["boundary_collisions_total"] = m_collisions;
     double total = 0;
     for (std::size_t i = 0; i < g.systems().size(); ++i) total += g.total_seconds(i);
     nlohmann::json systems = nlohmann::json::array();

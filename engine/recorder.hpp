@@ -33,6 +33,7 @@ private:
     std::filesystem::path m_dir;
     std::string m_csv;
     std::size_t m_frame = 0;
+    std::uint64_t m_collisions = 0;
     double m_next_frame_time = 0;
     std::chrono::steady_clock::time_point m_t0;
 };

@@ -23,6 +23,7 @@ inline const std::string boundary_neighbours = "fluid.boundary_neighbours";
 inline const std::string boundary_grid = "boundary.grid";
 inline const std::string dt = "step.dt";
 inline const std::string stats = "step.stats";
+inline const std::string collisions = "step.collisions";
 }  // namespace res
 
 /// @brief Constants derived from the scene once (SI units).
@@ -52,6 +53,7 @@ struct StepState {
     double rho_err_avg = 0, rho_err_max = 0;  ///< max(rho/rho0 - 1, 0), fluid average and max
     double v_max = 0, a_max = 0;
     Index a_max_particle = 0;
+    std::uint64_t collisions = 0;  ///< particles put back on a boundary surface this step
 };
 
 struct ParticleSet {

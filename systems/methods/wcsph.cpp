@@ -1,5 +1,6 @@
 #include "systems/methods/wcsph.hpp"
 
+#include "systems/boundary/boundary_collision_system.hpp"
 #include "systems/boundary/boundary_volume_system.hpp"
 #include "systems/density/density_system.hpp"
 #include "systems/forces/forces_system.hpp"
@@ -22,6 +23,7 @@ Recipe make_wcsph_recipe(const Scene& scene) {
     r.step.push_back(std::make_unique<StepStatsSystem>());
     if (scene.simulation.stepping.mode == SteppingMode::Global) r.step.push_back(std::make_unique<GlobalDtSystem>());
     r.step.push_back(std::make_unique<SymplecticEulerSystem>());
+    if (boundary) r.step.push_back(std::make_unique<BoundaryCollisionSystem>());
     return r;
 }
 

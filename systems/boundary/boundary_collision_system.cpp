@@ -1,0 +1,88 @@
+// Position projection onto the declared boundary surfaces and removal of the velocity
+// component into the wall (cf. Ihmsen et al. 2010, eq. 9-12, with the analytic surface normal).
+#include "systems/boundary/boundary_collision_system.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
+
+#include "engine/components.hpp"
+#include "engine/world.hpp"
+
+namespace sph {
+
+Access BoundaryCollisionSystem::access() const {
+    return {{res::fluid(comp::position.name), res::fluid(comp::velocity.name)},
+            {res::fluid(comp::position.name), res::fluid(comp::velocity.name), res::collisions}};
+}
+
+namespace {
+
+// Returns true and corrects (x, v) if x lies beyond the surface of boundary b.
+bool collide(const BoundaryDesc& b, Vec3& x, Vec3& v) {
+    switch (b.shape) {
+        case BoundaryShape::Container: {
+            bool hit = false;
+            for (int a = 0; a < 3; ++a) {
+                const Real lo = Real(b.box.min[a]), hi = Real(b.box.max[a]);
+                if (x[a] < lo) {
+                    x[a] = lo;
+                    v[a] = std::max(v[a], Real(0));
+                    hit = true;
+                } else if (x[a] > hi) {
+                    x[a] = hi;
+                    v[a] = std::min(v[a], Real(0));
+                    hit = true;
+                }
+            }
+            return hit;
+        }
+        case BoundaryShape::Box: {
+            const Vec3 lo = b.box.min.cast<Real>(), hi = b.box.max.cast<Real>();
+            if (!((x.array() > lo.array()).all() && (x.array() < hi.array()).all())) return false;
+            // Inside the solid: leave through the nearest face.
+            int axis = 0;
+            bool to_max = false;
+            Real best = std::numeric_limits<Real>::max();
+            for (int a = 0; a < 3; ++a) {
+                if (x[a] - lo[a] < best) best = x[a] - lo[a], axis = a, to_max = false;
+                if (hi[a] - x[a] < best) best = hi[a] - x[a], axis = a, to_max = true;
+            }
+            x[axis] = to_max ? hi[axis] : lo[axis];
+            v[axis] = to_max ? std::max(v[axis], Real(0)) : std::min(v[axis], Real(0));
+            return true;
+        }
+        case BoundaryShape::Sphere: {
+            const Vec3 c = b.center.cast<Real>();
+            const Vec3 d = x - c;
+            const Real r = d.norm(), R = Real(b.radius);
+            if (r >= R) return false;
+            const Vec3 n = r > Real(0) ? Vec3(d / r) : Vec3::UnitY();
+            x = c + R * n;
+            const Real vn = v.dot(n);
+            if (vn < 0) v -= vn * n;
+            return true;
+        }
+    }
+    return false;
+}
+
+}  // namespace
+
+void BoundaryCollisionSystem::run(World& w) {
+    auto x = w.fluid.store.get(comp::position);
+    auto v = w.fluid.store.get(comp::velocity);
+    const auto& boundaries = w.scene.boundaries;
+    w.step.collisions = tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, x.size(), 4096), std::uint64_t(0),
+        [&](const auto& r, std::uint64_t count) {
+            for (std::size_t i = r.begin(); i < r.end(); ++i) {
+                bool hit = false;
+                for (const auto& b : boundaries) hit |= collide(b, x[i], v[i]);
+                count += hit;
+            }
+            return count;
+        },
+        std::plus<>());
+}
+
+}  // namespace sph
