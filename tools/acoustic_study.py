@@ -2,7 +2,7 @@
 """Runs a scene in `global` mode with and without the acoustic step condition, at two
 artificial viscosities, and prints a Markdown table (the README's stability measurement).
 
-usage: tools/acoustic_study.py [SCENE.json] [--sph-run build/tools/sph-run] [--out out/acoustic_study]
+usage: tools/acoustic_study.py [SCENE.json ...] [--sph-run build/tools/sph-run] [--out out/acoustic_study]
 Runs are sequential so that wall times compare; each run's outputs are kept in --out.
 """
 import argparse
@@ -13,18 +13,20 @@ import sys
 import time
 
 ap = argparse.ArgumentParser()
-ap.add_argument("scene", nargs="?", default="scenes/dam_break.json")
+ap.add_argument("scenes", nargs="*", default=["scenes/dam_break.json"])
 ap.add_argument("--sph-run", default="build/tools/sph-run")
 ap.add_argument("--out", default="out/acoustic_study")
 ap.add_argument("--viscosities", default="0.02,0.1")
 args = ap.parse_args()
 
 rows = []
-for alpha in [float(a) for a in args.viscosities.split(",")]:
+for scene in args.scenes:
+  stem = pathlib.Path(scene).stem
+  for alpha in [float(a) for a in args.viscosities.split(",")]:
     for acoustic in (True, False):
-        name = f"alpha{alpha}_{'acoustic' if acoustic else 'eq6-8_only'}"
+        name = f"{stem}_alpha{alpha}_{'acoustic' if acoustic else 'eq6-8_only'}"
         out = pathlib.Path(args.out) / name
-        cmd = [args.sph_run, args.scene, "--mode", "global", "--no-frames", "-q", "--out", str(out),
+        cmd = [args.sph_run, scene, "--mode", "global", "--no-frames", "-q", "--out", str(out),
                "--set", f"fluid.viscosity={alpha}", "--set", f"simulation.stepping.acoustic={'true' if acoustic else 'false'}"]
         print("running:", " ".join(cmd), file=sys.stderr, flush=True)
         t0 = time.time()
@@ -39,15 +41,15 @@ for alpha in [float(a) for a in args.viscosities.split(",")]:
             max_err = max(float(line.split(",")[k]) for line in stats[1:]) if len(stats) > 1 else 0.0
         outcome = "completed" if proc.returncode == 0 else f"failed (exit {proc.returncode})"
         detail = proc.stderr.strip().splitlines()[-1] if proc.returncode else ""
-        rows.append((alpha, acoustic, outcome, summary.get("simulated_time_s", 0.0), summary.get("steps", len(stats) - 1),
+        rows.append((stem, alpha, acoustic, outcome, summary.get("simulated_time_s", 0.0), summary.get("steps", len(stats) - 1),
                      summary.get("avg_dt_s", 0.0), max_err, wall, detail, summary.get("boundary_collisions_total", 0)))
 
-print(f"Scene `{args.scene}`, mode `global` (λv = 0.1, λf = 0.05, λc = 0.4 when on), date {time.strftime('%Y-%m-%d')}\n")
-print("| viscosity α | acoustic condition | outcome | simulated s | steps | avg Δt (ms) | max ρ error | wall collisions | wall s |")
-print("|---|---|---|---|---|---|---|---|---|")
-for alpha, acoustic, outcome, t, steps, avg_dt, err, wall, detail, coll in rows:
-    print(f"| {alpha} | {'on' if acoustic else 'off (eq. 6-8 only)'} | {outcome} | {t:.3f} | {steps} | "
+print(f"Mode `global` (λv = 0.1, λf = 0.05, λc = 0.4 when on), date {time.strftime('%Y-%m-%d')}\n")
+print("| scene | viscosity α | acoustic condition | outcome | simulated s | steps | avg Δt (ms) | max ρ error | wall collisions | wall s |")
+print("|---|---|---|---|---|---|---|---|---|---|")
+for stem, alpha, acoustic, outcome, t, steps, avg_dt, err, wall, detail, coll in rows:
+    print(f"| {stem} | {alpha} | {'on' if acoustic else 'off (eq. 6-8 only)'} | {outcome} | {t:.3f} | {steps} | "
           f"{avg_dt * 1e3:.3f} | {100 * err:.1f} % | {coll} | {wall:.1f} |")
 for r in rows:
-    if r[8]:
-        print(f"\n- α = {r[0]}, acoustic {'on' if r[1] else 'off'}: `{r[8]}`")
+    if r[9]:
+        print(f"\n- {r[0]}, α = {r[1]}, acoustic {'on' if r[2] else 'off'}: `{r[9]}`")
