@@ -183,7 +183,7 @@ void initialise_world(World& w, const Scene& scene) {
         w.boundary_grid.build(bs.get(comp::position));
     }
     w.step = StepState{};
-    w.step.dt = scene.simulation.stepping.dt;
+    w.step.set_dt(scene.simulation.stepping.dt);
 }
 
 Simulation::Simulation(const Scene& scene, Recipe recipe) {
@@ -215,12 +215,12 @@ void Simulation::step() {
     if (m_world.scene.simulation.stepping.mode == SteppingMode::Constant) {
         // Constant stepping has no dt system: the step is the scene's, clipped at the end.
         st.dt_stable = m_world.scene.simulation.stepping.dt;
-        st.dt = std::min(st.dt_stable, st.t_stop - st.t);
-        if (st.dt <= 0) st.dt = st.dt_stable;
+        st.set_dt_clipped(st.dt_stable);
     }
     m_graph->run();
     check_step();
-    m_world.step.t += m_world.step.dt;
+    m_world.step.t_ticks += m_world.step.dt_ticks;
+    m_world.step.t = to_seconds(m_world.step.t_ticks);
     ++m_world.step.step;
 }
 
@@ -228,7 +228,8 @@ void Simulation::run_until(double end_time, const std::function<void(const Simul
     // Stop when the remaining time is below a millionth of a step, so round-off never adds
     // a sliver step at the end.
     m_world.step.t_stop = end_time;
-    while (m_world.step.t < end_time - 1e-9 * std::max(m_world.step.dt, 1e-12)) {
+    const Tick end = to_ticks(end_time + 0.5 * kSecondsPerTick);
+    while (m_world.step.t_ticks < end) {
         step();
         if (after_step) after_step(*this);
     }

@@ -3,6 +3,8 @@
 /// @brief All simulation data: the fluid and boundary particle sets (component stores), their
 /// grids and neighbour lists, the derived physical constants and the current step's scalars.
 /// Systems receive it as an argument; there are no globals.
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 
@@ -40,10 +42,20 @@ struct Physics {
     double fluid_height = 0;  ///< m, used for the default c_s
 };
 
+/// @brief Simulated time is kept in integer ticks of 1 ps, so sums of steps and the activity
+/// test of individual stepping (t_last + dt_i <= t) are exact; 2^63 ticks = 106 days.
+using Tick = std::int64_t;
+inline constexpr double kSecondsPerTick = 1e-12;
+/// @brief Seconds to ticks, rounded down (a step never grows by quantisation).
+inline Tick to_ticks(double seconds) { return static_cast<Tick>(std::floor(seconds / kSecondsPerTick)); }
+inline double to_seconds(Tick t) { return double(t) * kSecondsPerTick; }
+
 /// @brief Per-step scalars, written by the step's systems.
 struct StepState {
-    double t = 0;               ///< simulated time at the start of the step (s)
-    double dt = 0;              ///< the step being taken (s)
+    Tick t_ticks = 0;           ///< simulated time at the start of the step
+    Tick dt_ticks = 0;          ///< the step being taken
+    double t = 0;               ///< = to_seconds(t_ticks)
+    double dt = 0;              ///< = to_seconds(dt_ticks)
     double dt_stable = 0;       ///< the step the stability conditions allow (before clipping)
     /// No step may end past this time (the run's end): the dt system clips the last step.
     double t_stop = std::numeric_limits<double>::infinity();
@@ -54,6 +66,23 @@ struct StepState {
     double v_max = 0, a_max = 0;
     Index a_max_particle = 0;
     std::uint64_t collisions = 0;  ///< particles put back on a boundary surface this step
+
+    /// @brief Sets the step (quantised down to whole ticks, at least one tick).
+    void set_dt(double seconds) {
+        dt_ticks = std::max<Tick>(1, to_ticks(seconds));
+        dt = to_seconds(dt_ticks);
+    }
+    /// @brief Sets the step to at most `seconds` and never past t_stop (the run's end).
+    void set_dt_clipped(double seconds) {
+        set_dt(seconds);
+        if (std::isfinite(t_stop)) {
+            const Tick left = to_ticks(t_stop + 0.5 * kSecondsPerTick) - t_ticks;
+            if (left > 0 && left < dt_ticks) {
+                dt_ticks = left;
+                dt = to_seconds(dt_ticks);
+            }
+        }
+    }
 };
 
 struct ParticleSet {

@@ -23,8 +23,7 @@ void GlobalDtSystem::run(World& w) {
     StepState& s = w.step;
     s.dt_stable = global_time_step(w.scene.simulation.stepping, w.physics.h, w.physics.speed_of_sound, s.v_max, s.a_max);
     // The last step is shortened so that the run ends exactly at its end time.
-    s.dt = std::min(s.dt_stable, std::max(s.t_stop - s.t, 0.0));
-    if (s.dt <= 0) s.dt = s.dt_stable;
+    s.set_dt_clipped(s.dt_stable);
 }
 
 }  // namespace sph
