@@ -15,6 +15,20 @@ inline constexpr Component<Real> pressure{"pressure"};
 /// Stable particle identity, kept through every permutation (diagnostics and output).
 inline constexpr Component<std::uint32_t> id{"id"};
 
+// Individual time stepping (He et al. Alg. 2).
+inline constexpr Component<double> dt{"dt"};          ///< Delta t_i after spreading (line 16), s
+inline constexpr Component<double> dt_raw{"dt_raw"};  ///< Delta t_i^raw (line 13), s
+inline constexpr Component<std::int64_t> t_last{"t_last"};  ///< last evaluation, ticks (line 14)
+inline constexpr Component<Real> drho_dt{"drho_dt"};        ///< He eq. 5
+inline constexpr Component<std::uint8_t> active{"active"};  ///< 1 when evaluated this step
+/// Set by a system that disturbs a particle between evaluations (a wall contact): the
+/// particle is made active at the next step so its base state follows the change.
+inline constexpr Component<std::uint8_t> wake{"wake"};
+/// Base state at the last evaluation; every particle is integrated from it (lines 19-21).
+inline constexpr Component<Vec3> position_last{"position_last"};
+inline constexpr Component<Vec3> velocity_last{"velocity_last"};
+inline constexpr Component<Real> density_last{"density_last"};
+
 // Boundary particles (Akinci et al. 2012).
 inline constexpr Component<Real> volume{"volume"};  ///< V_b = 1 / sum_k W_bk (Akinci eq. 4)
 inline constexpr Component<Vec3> normal{"normal"};

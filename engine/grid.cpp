@@ -109,6 +109,29 @@ void build_neighbour_lists(const UniformGrid& grid, std::span<const Vec3> query_
     }
 }
 
+void NeighbourLists::permute(std::span<const Index> perm, bool remap_entries) {
+    const std::size_t n = count.size();
+    if (n == 0 || perm.size() != n) return;
+    std::vector<Index> inverse;
+    if (remap_entries) {
+        inverse.resize(n);
+        for (std::size_t i = 0; i < n; ++i) inverse[perm[i]] = Index(i);
+    }
+    std::vector<Index> new_count(n), new_indices(indices.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const auto& r) {
+        for (std::size_t i = r.begin(); i < r.end(); ++i) {
+            const Index from = perm[i];
+            const Index c = std::min(count[from], capacity);
+            new_count[i] = count[from];
+            const Index* src = indices.data() + std::size_t(from) * capacity;
+            Index* dst = new_indices.data() + i * capacity;
+            for (Index k = 0; k < c; ++k) dst[k] = remap_entries ? inverse[src[k]] : src[k];
+        }
+    });
+    count.swap(new_count);
+    indices.swap(new_indices);
+}
+
 namespace {
 std::uint64_t spread_bits(std::uint64_t v) {  // 21 bits -> every third bit
     v &= 0x1fffff;

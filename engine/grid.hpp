@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cstdint>
 #include <span>
+
+#include <tbb/parallel_for.h>
 #include <vector>
 
 #include "engine/scene.hpp"
@@ -82,7 +84,15 @@ struct NeighbourLists {
         return count.capacity() * sizeof(Index) + indices.capacity() * sizeof(Index);
     }
     std::size_t total() const;
+    /// @brief Follows a permutation of the query particles (new[i] = old[perm[i]]); when
+    /// `remap_entries`, the entries refer to the same particle set and are renumbered too.
+    /// Keeps the lists of particles that are not rebuilt this step valid after a sort.
+    void permute(std::span<const Index> perm, bool remap_entries);
 };
+
+/// @brief Indices i in [0, n) with pred(i), ascending; parallel and deterministic.
+template <class Pred>
+std::vector<Index> collect_indices(std::size_t n, Pred&& pred);
 
 /// @brief Which particles to (re)build lists for: all of them, or an explicit subset.
 struct QuerySubset {
@@ -100,5 +110,20 @@ void build_neighbour_lists(const UniformGrid& grid, std::span<const Vec3> query_
 /// @brief Permutation that orders particles along the z-order (Morton) curve of their grid
 /// cells, ties broken by current index: new[i] = old[perm[i]].
 std::vector<Index> zorder_permutation(const UniformGrid& grid, std::span<const Vec3> positions);
+
+template <class Pred>
+std::vector<Index> collect_indices(std::size_t n, Pred&& pred) {
+    constexpr std::size_t kBlock = 4096;
+    const std::size_t blocks = (n + kBlock - 1) / kBlock;
+    std::vector<std::vector<Index>> parts(blocks);
+    tbb::parallel_for(std::size_t(0), blocks, [&](std::size_t b) {
+        const std::size_t end = std::min(n, (b + 1) * kBlock);
+        for (std::size_t i = b * kBlock; i < end; ++i)
+            if (pred(i)) parts[b].push_back(Index(i));
+    });
+    std::vector<Index> out;
+    for (const auto& p : parts) out.insert(out.end(), p.begin(), p.end());
+    return out;
+}
 
 }  // namespace sph

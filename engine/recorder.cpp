@@ -11,7 +11,9 @@ namespace sph {
 Recorder::Recorder(std::filesystem::path dir, const Simulation& sim) : m_dir(std::move(dir)) {
     std::filesystem::create_directories(m_dir);
     std::ostringstream h;
-    h << "step,t,dt,updated,neighbours_per_particle,rho_err_avg,rho_err_max,v_max,a_max,collisions,wall_s";
+    h << "step,t,dt,updated,neighbours_per_particle,rho_err_avg,rho_err_max,v_max,a_max,collisions,"
+         "active,active_fraction,neighbour_searches,force_evaluations,boundary_contributions,"
+         "propagation_updates,wall_s";
     for (const auto& s : sim.graph().systems()) h << ",ms_" << s->name();
     h << '\n';
     m_csv = h.str();
@@ -38,13 +40,22 @@ void Recorder::after_step(const Simulation& sim) {
     std::ostringstream row;
     row << std::setprecision(9) << (s.step - 1) << ',' << s.t - s.dt << ',' << s.dt << ',' << s.updated << ','
         << (s.updated ? double(s.neighbour_pairs) / double(s.updated) : 0.0) << ',' << s.rho_err_avg << ','
-        << s.rho_err_max << ',' << s.v_max << ',' << s.a_max << ',' << s.collisions << ',' << wall;
+        << s.rho_err_max << ',' << s.v_max << ',' << s.a_max << ',' << s.collisions << ',' << s.active << ','
+        << (w.fluid.size() ? double(s.active) / double(w.fluid.size()) : 0.0) << ',' << s.neighbour_searches << ','
+        << s.force_evaluations << ',' << s.boundary_contributions << ',' << s.propagation_updates << ',' << wall;
     const auto& g = sim.graph();
     row << std::setprecision(4);
     for (std::size_t i = 0; i < g.systems().size(); ++i) row << ',' << g.last_seconds(i) * 1e3;
     row << '\n';
     m_csv += row.str();
     m_collisions += s.collisions;
+    if (w.fluid.size()) m_active_fraction_sum += double(s.active) / double(w.fluid.size());
+    // The step the conditions allowed (a last step clipped to the end time is not a minimum).
+    const double dt_taken = s.dt_stable > 0 ? s.dt_stable : s.dt;
+    m_dt_min = m_steps ? std::min(m_dt_min, dt_taken) : dt_taken;
+    m_dt_max = std::max(m_dt_max, dt_taken);
+    m_rho_err_max = std::max(m_rho_err_max, s.rho_err_max);
+    ++m_steps;
     const double rate = w.scene.simulation.frame_rate;
     if (rate > 0 && s.t >= m_next_frame_time - 1e-9) write_frame(sim);
 }
@@ -68,6 +79,10 @@ nlohmann::json Recorder::finish(const Simulation& sim, double wall_seconds, int 
     const double fps = wall_seconds > 0 ? double(w.fluid.size()) * double(sim.steps()) / wall_seconds : 0.0;
     j["fluid_particle_steps_per_s"] = fps;
     j["avg_dt_s"] = sim.steps() ? sim.time() / double(sim.steps()) : 0.0;
+    j["min_dt_s"] = m_dt_min;
+    j["max_dt_s"] = m_dt_max;
+    j["avg_active_fraction"] = m_steps ? m_active_fraction_sum / double(m_steps) : 0.0;
+    j["max_density_error"] = m_rho_err_max;
     j["peak_memory_bytes"] = peak_memory_bytes();
     const std::size_t bytes = sim.particle_bytes();
     j["particle_data_bytes"] = bytes;

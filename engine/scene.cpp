@@ -41,6 +41,8 @@ const char* to_string(SteppingMode m) {
             return "constant";
         case SteppingMode::Global:
             return "global";
+        case SteppingMode::Individual:
+            return "individual";
     }
     return "unknown";
 }
@@ -83,7 +85,8 @@ constexpr const char* k_name_expected =
     "a non-empty string without \"/\" (it names the output folder)";
 
 constexpr std::array<Method, 1> k_methods{Method::Wcsph};
-constexpr std::array<SteppingMode, 2> k_modes{SteppingMode::Constant, SteppingMode::Global};
+constexpr std::array<SteppingMode, 3> k_modes{SteppingMode::Constant, SteppingMode::Global,
+                                              SteppingMode::Individual};
 constexpr std::array<BoundaryShape, 3> k_shapes{BoundaryShape::Container, BoundaryShape::Box,
                                                 BoundaryShape::Sphere};
 constexpr std::array<const char*, 1> k_formats{"vtu"};
@@ -784,6 +787,13 @@ class Reader {
         require_object(n, "an object");
         check_keys(n, k_stepping_keys);
         if (const json* v = n.find("mode")) p.mode = pick_enum(n.at(*v, "mode"), k_modes);
+        if (p.mode == SteppingMode::Individual) {
+            // He et al. sec. 2.3: half the global coefficients, and no acoustic condition
+            // (the published algorithm has none); each can still be set explicitly.
+            p.lambda_v = 0.05;
+            p.lambda_f = 0.025;
+            p.acoustic = false;
+        }
         read_number(n, "dt", positive("seconds"), p.dt);
         read_number(n, "lambda_v", coefficient(), p.lambda_v);
         read_number(n, "lambda_f", coefficient(), p.lambda_f);

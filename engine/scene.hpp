@@ -24,13 +24,14 @@ struct Aabb {
 };
 
 enum class Method { Wcsph };
-enum class SteppingMode { Constant, Global };
+enum class SteppingMode { Constant, Global, Individual };
 
 /// @brief Names as written in scene files and on the command line.
 const char* to_string(Method m);
 const char* to_string(SteppingMode m);
 
-/// @brief Time-step control (He et al. eq. 6-8 for `global`).
+/// @brief Time-step control (He et al. eq. 6-8 for `global`; eq. 9 and Alg. 2 for
+/// `individual`, whose defaults are lambda_v 0.05, lambda_f 0.025 and no acoustic condition).
 struct SteppingParams {
     SteppingMode mode = SteppingMode::Global;
     double dt = 4e-4;          ///< s; the step of `constant`, and the first step of `global`.

@@ -206,6 +206,10 @@ std::size_t Simulation::particle_bytes() const {
 void Simulation::spatial_sort() {
     auto perm = zorder_permutation(m_world.fluid_grid, m_world.fluid.store.get(comp::position));
     m_world.fluid.store.permute(perm);
+    // Lists that are kept across steps (individual stepping reuses inactive particles' lists)
+    // follow the permutation; fluid->fluid entries are renumbered as well.
+    m_world.fluid_neighbours.permute(perm, true);
+    m_world.boundary_neighbours.permute(perm, false);
 }
 
 void Simulation::step() {

@@ -26,6 +26,9 @@ inline const std::string boundary_grid = "boundary.grid";
 inline const std::string dt = "step.dt";
 inline const std::string stats = "step.stats";
 inline const std::string collisions = "step.collisions";
+inline const std::string active_set = "fluid.active_set";
+inline const std::string halo_set = "fluid.halo_set";
+inline const std::string moving_bodies = "boundary.moving_bodies";
 }  // namespace res
 
 /// @brief Constants derived from the scene once (SI units).
@@ -66,6 +69,12 @@ struct StepState {
     double v_max = 0, a_max = 0;
     Index a_max_particle = 0;
     std::uint64_t collisions = 0;  ///< particles put back on a boundary surface this step
+    // Work counters (individual stepping; every fluid particle otherwise).
+    std::uint64_t active = 0;                  ///< fluid particles active this step
+    std::uint64_t neighbour_searches = 0;      ///< fluid particles whose lists were rebuilt
+    std::uint64_t force_evaluations = 0;       ///< fluid particles whose forces were evaluated
+    std::uint64_t boundary_contributions = 0;  ///< boundary list entries of those particles
+    std::uint64_t propagation_updates = 0;     ///< particles whose Delta t_i was recomputed
 
     /// @brief Sets the step (quantised down to whole ticks, at least one tick).
     void set_dt(double seconds) {
@@ -85,6 +94,15 @@ struct StepState {
     }
 };
 
+/// @brief A boundary that moves with a kinematic motion: its boundary particles are the
+/// contiguous range [begin, end) of the boundary store. Updated every step by the boundary
+/// motion system; read by individual stepping to wake fluid particles it comes near.
+struct MovingBody {
+    std::size_t begin = 0, end = 0;  ///< boundary particle range
+    Aabb bounds;                     ///< current bounding box of its boundary particles, m
+    double speed = 0;                ///< current largest speed of any of its points, m/s
+};
+
 struct ParticleSet {
     ComponentStore store;
     std::size_t size() const { return store.size(); }
@@ -101,6 +119,12 @@ struct World {
     UniformGrid boundary_grid;
     NeighbourLists fluid_neighbours;     ///< fluid -> fluid (self excluded)
     NeighbourLists boundary_neighbours;  ///< fluid -> boundary
+    /// Individual stepping: active particles (ascending), and the inactive neighbours of
+    /// active particles (ascending), both rebuilt each step.
+    std::vector<Index> active_set;
+    std::vector<Index> halo_set;
+    /// Boundaries with a motion (empty when every boundary is static).
+    std::vector<MovingBody> moving_bodies;
     StepState step;
 };
 

@@ -3,13 +3,21 @@
 // Boundary (Akinci et al. 2012 eq. 10 with pressure mirroring p_b = p_i, rho_b = rho_i):
 // a_i -= sum_b psi_b (2 p_i / rho_i^2) grad W_ib, psi_b = rho0 V_b; viscosity against the wall
 // uses the same Pi with rho_j = rho0 and the wall's velocity (zero for static walls).
+// Individual stepping (He Alg. 2 lines 10-13): active particles only, plus
+// drho_i/dt = sum_j m_j v_ij . grad W_ij + sum_b psi_b v_i . grad W_ib (He eq. 5) and
+// Delta t_i^raw = min(lambda_v h/|v_i|, lambda_f sqrt(h/|a_i|)) (line 13; the same function
+// as the global step, so that equal steps reproduce `global` exactly).
 #include "systems/forces/forces_system.hpp"
 
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
+#include <functional>
 
 #include "engine/components.hpp"
 #include "engine/world.hpp"
 #include "systems/forces/forces_kernels.hpp"
+#include "systems/timestep/global_dt_system.hpp"
 
 namespace sph {
 
@@ -20,10 +28,22 @@ Access ForcesSystem::access() const {
     if (m_with_boundary)
         a.reads.insert(a.reads.end(), {res::boundary_neighbours, res::boundary(comp::position.name),
                                        res::boundary(comp::volume.name)});
+    if (m_individual) {
+        a.reads.push_back(res::active_set);
+        a.writes.insert(a.writes.end(), {res::fluid(comp::drho_dt.name), res::fluid(comp::dt_raw.name),
+                                         res::fluid(comp::t_last.name)});
+    }
     return a;
 }
 
-void ForcesSystem::register_components(World& w) { w.fluid.store.add(comp::acceleration); }
+void ForcesSystem::register_components(World& w) {
+    w.fluid.store.add(comp::acceleration);
+    if (m_individual) {
+        w.fluid.store.add(comp::drho_dt);
+        w.fluid.store.add(comp::dt_raw);
+        w.fluid.store.add(comp::t_last);
+    }
+}
 
 void ForcesSystem::run(World& w) {
     const auto x = w.fluid.store.get(comp::position);
@@ -38,31 +58,68 @@ void ForcesSystem::run(World& w) {
     const Physics& ph = w.physics;
     const Real m = ph.mass, alpha = ph.viscosity, c = ph.speed_of_sound, h = ph.h, rho0 = ph.rest_density;
     const Vec3 g = ph.gravity;
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 256), [&](const auto& r) {
-        for (std::size_t i = r.begin(); i < r.end(); ++i) {
-            const Vec3 xi = x[i], vi = v[i];
-            const Real rhoi = rho[i];
-            const Real pi = p[i] / (rhoi * rhoi);
-            Vec3 a = Vec3::Zero();
-            for (Index j : w.fluid_neighbours.of(Index(i))) {
-                const Vec3 xij = xi - x[j];
-                const Real r2 = xij.squaredNorm();
-                const Vec3 grad = kernel.grad(xij, std::sqrt(r2));
-                const Real visc = alpha > 0 ? monaghan_pi((vi - v[j]).dot(xij), r2, alpha, c, h, rhoi, rho[j]) : Real(0);
-                a -= (m * (pi + p[j] / (rho[j] * rho[j]) + visc)) * grad;
-            }
-            if (has_boundary) {
-                for (Index b : w.boundary_neighbours.of(Index(i))) {
-                    const Vec3 xib = xi - xb[b];
-                    const Real r2 = xib.squaredNorm();
-                    const Vec3 grad = kernel.grad(xib, std::sqrt(r2));
-                    const Real visc = alpha > 0 ? monaghan_pi(vi.dot(xib), r2, alpha, c, h, rhoi, rho0) : Real(0);
-                    a -= (rho0 * vb[b] * (Real(2) * pi + visc)) * grad;
-                }
-            }
-            acc[i] = a + g;
+    std::span<Real> drho;
+    std::span<double> dt_raw;
+    if (m_individual) {
+        drho = w.fluid.store.get(comp::drho_dt);
+        dt_raw = w.fluid.store.get(comp::dt_raw);
+    }
+    const SteppingParams& stepping = w.scene.simulation.stepping;
+    auto evaluate = [&](Index i) {
+        const Vec3 xi = x[i], vi = v[i];
+        const Real rhoi = rho[i];
+        const Real pi = p[i] / (rhoi * rhoi);
+        Vec3 a = Vec3::Zero();
+        Real div = 0;  // He eq. 5
+        for (Index j : w.fluid_neighbours.of(i)) {
+            const Vec3 xij = xi - x[j];
+            const Real r2 = xij.squaredNorm();
+            const Vec3 grad = kernel.grad(xij, std::sqrt(r2));
+            const Vec3 vij = vi - v[j];
+            const Real visc = alpha > 0 ? monaghan_pi(vij.dot(xij), r2, alpha, c, h, rhoi, rho[j]) : Real(0);
+            a -= (m * (pi + p[j] / (rho[j] * rho[j]) + visc)) * grad;
+            if (m_individual) div += m * vij.dot(grad);
         }
-    });
+        if (has_boundary) {
+            for (Index b : w.boundary_neighbours.of(i)) {
+                const Vec3 xib = xi - xb[b];
+                const Real r2 = xib.squaredNorm();
+                const Vec3 grad = kernel.grad(xib, std::sqrt(r2));
+                const Real visc = alpha > 0 ? monaghan_pi(vi.dot(xib), r2, alpha, c, h, rhoi, rho0) : Real(0);
+                a -= (rho0 * vb[b] * (Real(2) * pi + visc)) * grad;
+                if (m_individual) div += rho0 * vb[b] * vi.dot(grad);
+            }
+        }
+        acc[i] = a + g;
+        if (m_individual) {
+            drho[i] = div;
+            // He Alg. 2 line 13, computed exactly as the global step of eq. 6-8.
+            dt_raw[i] = global_time_step(stepping, h, c, std::sqrt(double(vi.squaredNorm())),
+                                         std::sqrt(double(acc[i].squaredNorm())));
+        }
+    };
+    if (!m_individual) {
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 256), [&](const auto& r) {
+            for (std::size_t i = r.begin(); i < r.end(); ++i) evaluate(Index(i));
+        });
+        w.step.force_evaluations = x.size();
+        return;
+    }
+    // He Alg. 2 lines 10-14: active particles only; each evaluation stamps t_last = t_sim.
+    const auto& active = w.active_set;
+    auto t_last = w.fluid.store.get(comp::t_last);
+    const Tick now = w.step.t_ticks;
+    w.step.force_evaluations = tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, active.size(), 128), std::uint64_t(0),
+        [&](const auto& r, std::uint64_t done) {
+            for (std::size_t k = r.begin(); k < r.end(); ++k) {
+                evaluate(active[k]);
+                t_last[active[k]] = now;
+                ++done;
+            }
+            return done;
+        },
+        std::plus<>());
 }
 
 }  // namespace sph

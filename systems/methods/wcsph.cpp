@@ -1,12 +1,15 @@
 #include "systems/methods/wcsph.hpp"
 
+#include "systems/active/select_active_system.hpp"
 #include "systems/boundary/boundary_collision_system.hpp"
 #include "systems/boundary/boundary_volume_system.hpp"
 #include "systems/density/density_system.hpp"
 #include "systems/forces/forces_system.hpp"
+#include "systems/integrate/async_integration_system.hpp"
 #include "systems/integrate/symplectic_euler_system.hpp"
 #include "systems/metrics/step_stats_system.hpp"
 #include "systems/neighbours/neighbour_search_system.hpp"
+#include "systems/timestep/dt_propagation_system.hpp"
 #include "systems/timestep/global_dt_system.hpp"
 
 namespace sph {
@@ -14,15 +17,26 @@ namespace sph {
 Recipe make_wcsph_recipe(const Scene& scene) {
     Recipe r;
     const bool boundary = !scene.boundaries.empty();
+    const SteppingMode mode = scene.simulation.stepping.mode;
+    const bool individual = mode == SteppingMode::Individual;
     if (boundary) r.setup.push_back(std::make_unique<BoundaryVolumeSystem>());
+    // He et al. Alg. 2 (individual) or Alg. 1 with eq. 6-8 (global) / a fixed step (constant).
+    if (individual) r.step.push_back(std::make_unique<SelectActiveSystem>());
     r.step.push_back(std::make_unique<FluidGridSystem>());
-    r.step.push_back(std::make_unique<FluidNeighbourSystem>());
-    if (boundary) r.step.push_back(std::make_unique<BoundaryNeighbourSystem>());
-    r.step.push_back(std::make_unique<DensitySystem>(boundary));
-    r.step.push_back(std::make_unique<ForcesSystem>(boundary));
-    r.step.push_back(std::make_unique<StepStatsSystem>());
-    if (scene.simulation.stepping.mode == SteppingMode::Global) r.step.push_back(std::make_unique<GlobalDtSystem>());
-    r.step.push_back(std::make_unique<SymplecticEulerSystem>());
+    r.step.push_back(std::make_unique<FluidNeighbourSystem>(individual));
+    if (boundary) r.step.push_back(std::make_unique<BoundaryNeighbourSystem>(individual));
+    if (individual) r.step.push_back(std::make_unique<HaloSystem>(boundary));
+    r.step.push_back(std::make_unique<DensitySystem>(boundary, individual));
+    r.step.push_back(std::make_unique<ForcesSystem>(boundary, individual));
+    r.step.push_back(std::make_unique<StepStatsSystem>(individual));
+    if (individual) {
+        r.step.push_back(std::make_unique<DtPropagationSystem>());
+        r.step.push_back(std::make_unique<IndividualGlobalDtSystem>());
+        r.step.push_back(std::make_unique<AsyncIntegrationSystem>());
+    } else {
+        if (mode == SteppingMode::Global) r.step.push_back(std::make_unique<GlobalDtSystem>());
+        r.step.push_back(std::make_unique<SymplecticEulerSystem>());
+    }
     if (boundary) r.step.push_back(std::make_unique<BoundaryCollisionSystem>());
     return r;
 }

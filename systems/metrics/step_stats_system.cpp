@@ -9,9 +9,11 @@
 namespace sph {
 
 Access StepStatsSystem::access() const {
-    return {{res::fluid(comp::density.name), res::fluid(comp::velocity.name), res::fluid(comp::acceleration.name),
-             res::fluid_neighbours},
-            {res::stats}};
+    Access a{{res::fluid(comp::density.name), res::fluid(comp::velocity.name), res::fluid(comp::acceleration.name),
+              res::fluid_neighbours},
+             {res::stats}};
+    if (m_individual) a.reads.insert(a.reads.end(), {res::fluid(comp::active.name), res::active_set});
+    return a;
 }
 
 namespace {
@@ -29,6 +31,8 @@ void StepStatsSystem::run(World& w) {
     const double rho0 = w.physics.rest_density;
     const auto& counts = w.fluid_neighbours.count;
     const std::size_t n = rho.size();
+    // Individual stepping: neighbour pairs and the updated count are those of the active set.
+    const std::uint8_t* is_active = m_individual ? w.fluid.store.get(comp::active).data() : nullptr;
     // Deterministic reduction: the same sums whatever the thread count.
     const Acc r = tbb::parallel_deterministic_reduce(
         tbb::blocked_range<std::size_t>(0, n, 1024), Acc{},
@@ -43,7 +47,7 @@ void StepStatsSystem::run(World& w) {
                     acc.a2_max = a2;
                     acc.a_arg = Index(i);
                 }
-                if (i < counts.size()) acc.pairs += counts[i];
+                if (i < counts.size() && (!is_active || is_active[i])) acc.pairs += counts[i];
             }
             return acc;
         },
@@ -64,7 +68,8 @@ void StepStatsSystem::run(World& w) {
     s.v_max = std::sqrt(r.v2_max);
     s.a_max = std::sqrt(r.a2_max);
     s.a_max_particle = r.a_arg;
-    s.updated = n;
+    s.updated = m_individual ? s.active : n;
+    if (!m_individual) s.active = n;
     s.neighbour_pairs = r.pairs;
 }
 

@@ -8,9 +8,14 @@ namespace sph {
 
 class StepStatsSystem final : public System {
 public:
+    /// @param individual count only the active set as updated (individual stepping).
+    explicit StepStatsSystem(bool individual = false) : m_individual(individual) {}
     std::string name() const override { return "step_stats"; }
     Access access() const override;
     void run(World& w) override;
+
+private:
+    bool m_individual;
 };
 
 }  // namespace sph

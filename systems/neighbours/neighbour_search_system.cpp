@@ -10,20 +10,33 @@ namespace sph {
 Access FluidGridSystem::access() const { return {{res::fluid(comp::position.name)}, {res::fluid_grid}}; }
 void FluidGridSystem::run(World& w) { w.fluid_grid.build(w.fluid.store.get(comp::position)); }
 
-Access FluidNeighbourSystem::access() const {
-    return {{res::fluid(comp::position.name), res::fluid_grid}, {res::fluid_neighbours}};
+namespace {
+QuerySubset subset_of(const World& w, bool individual) {
+    return individual ? QuerySubset{w.active_set, false} : QuerySubset{};
 }
+}  // namespace
+
+Access FluidNeighbourSystem::access() const {
+    Access a{{res::fluid(comp::position.name), res::fluid_grid}, {res::fluid_neighbours}};
+    if (m_individual) a.reads.push_back(res::active_set);
+    return a;
+}
+// He Alg. 2 lines 3-4: fresh lists for the active particles only; the others keep theirs.
 void FluidNeighbourSystem::run(World& w) {
-    build_neighbour_lists(w.fluid_grid, w.fluid.store.get(comp::position), w.physics.h, true, QuerySubset{},
+    const QuerySubset subset = subset_of(w, m_individual);
+    build_neighbour_lists(w.fluid_grid, w.fluid.store.get(comp::position), w.physics.h, true, subset,
                           w.fluid_neighbours);
+    w.step.neighbour_searches = subset.all ? w.fluid.size() : subset.indices.size();
 }
 
 Access BoundaryNeighbourSystem::access() const {
-    return {{res::fluid(comp::position.name), res::boundary_grid}, {res::boundary_neighbours}};
+    Access a{{res::fluid(comp::position.name), res::boundary_grid}, {res::boundary_neighbours}};
+    if (m_individual) a.reads.push_back(res::active_set);
+    return a;
 }
 void BoundaryNeighbourSystem::run(World& w) {
-    build_neighbour_lists(w.boundary_grid, w.fluid.store.get(comp::position), w.physics.h, false, QuerySubset{},
-                          w.boundary_neighbours);
+    build_neighbour_lists(w.boundary_grid, w.fluid.store.get(comp::position), w.physics.h, false,
+                          subset_of(w, m_individual), w.boundary_neighbours);
 }
 
 }  // namespace sph

@@ -15,20 +15,31 @@ public:
     void run(World& w) override;
 };
 
-/// @brief Fluid->fluid neighbour lists (r < h, self excluded) of every fluid particle.
+/// @brief Fluid->fluid neighbour lists (r < h, self excluded) of every fluid particle, or
+/// with individual stepping of the active ones only (He Alg. 2 lines 3-4); inactive
+/// particles keep their last lists.
 class FluidNeighbourSystem final : public System {
 public:
+    explicit FluidNeighbourSystem(bool individual = false) : m_individual(individual) {}
     std::string name() const override { return "fluid_neighbours"; }
     Access access() const override;
     void run(World& w) override;
+
+private:
+    bool m_individual;
 };
 
-/// @brief Fluid->boundary neighbour lists (r < h) against the static boundary grid.
+/// @brief Fluid->boundary neighbour lists (r < h) against the static boundary grid, of every
+/// fluid particle or of the active ones.
 class BoundaryNeighbourSystem final : public System {
 public:
+    explicit BoundaryNeighbourSystem(bool individual = false) : m_individual(individual) {}
     std::string name() const override { return "boundary_neighbours"; }
     Access access() const override;
     void run(World& w) override;
+
+private:
+    bool m_individual;
 };
 
 }  // namespace sph
