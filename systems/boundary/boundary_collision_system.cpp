@@ -12,7 +12,8 @@ namespace sph {
 
 Access BoundaryCollisionSystem::access() const {
     return {{res::fluid(comp::position.name), res::fluid(comp::velocity.name)},
-            {res::fluid(comp::position.name), res::fluid(comp::velocity.name), res::collisions}};
+            {res::fluid(comp::position.name), res::fluid(comp::velocity.name), res::collisions,
+             res::fluid(comp::wake.name)}};
 }
 
 namespace {
@@ -72,12 +73,17 @@ void BoundaryCollisionSystem::run(World& w) {
     auto x = w.fluid.store.get(comp::position);
     auto v = w.fluid.store.get(comp::velocity);
     const auto& boundaries = w.scene.boundaries;
+    const std::span<std::uint8_t> wake =
+        w.fluid.store.has(comp::wake.name) ? w.fluid.store.get(comp::wake) : std::span<std::uint8_t>{};
     w.step.collisions = tbb::parallel_reduce(
         tbb::blocked_range<std::size_t>(0, x.size(), 4096), std::uint64_t(0),
         [&](const auto& r, std::uint64_t count) {
             for (std::size_t i = r.begin(); i < r.end(); ++i) {
                 bool hit = false;
                 for (const auto& b : boundaries) hit |= collide(b, x[i], v[i]);
+                // Individual stepping: the corrected state must become the particle's base
+                // state, so it is evaluated at the next step (SelectActiveSystem reads wake).
+                if (hit && !wake.empty()) wake[i] = 1;
                 count += hit;
             }
             return count;
