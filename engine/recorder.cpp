@@ -1,9 +1,12 @@
 #include "engine/recorder.hpp"
 
+#include <cmath>
 #include <cstdio>
+#include <limits>
 #include <iomanip>
 #include <sstream>
 
+#include "engine/components.hpp"
 #include "engine/io.hpp"
 
 namespace sph {
@@ -95,6 +98,16 @@ nlohmann::json Recorder::finish(const Simulation& sim, double wall_seconds, int 
                     {"fluid_height", w.physics.fluid_height}};
     j["frames"] = m_frame;
     j["boundary_collisions_total"] = m_collisions;
+    // Front at the end: the largest x of a fluid particle with at least 4 fluid neighbours
+    // (so a lone droplet thrown ahead is not the front), in metres.
+    {
+        const auto x = w.fluid.store.get(comp::position);
+        double front = -std::numeric_limits<double>::infinity();
+        for (std::size_t i = 0; i < x.size(); ++i)
+            if (i < w.fluid_neighbours.count.size() && w.fluid_neighbours.count[i] >= 4)
+                front = std::max(front, double(x[i].x()));
+        j["front_x_m"] = std::isfinite(front) ? front : 0.0;
+    }
     double total = 0;
     for (std::size_t i = 0; i < g.systems().size(); ++i) total += g.total_seconds(i);
     nlohmann::json systems = nlohmann::json::array();
