@@ -32,5 +32,9 @@ inline constexpr Component<Real> density_last{"density_last"};
 // Boundary particles (Akinci et al. 2012).
 inline constexpr Component<Real> volume{"volume"};  ///< V_b = 1 / sum_k W_bk (Akinci eq. 4)
 inline constexpr Component<Vec3> normal{"normal"};
+/// Moving boundaries only (registered when the scene has one): the sampled position x0 of each
+/// boundary particle, at displacement zero; the particle is at x0 + d(t). The boundary store
+/// also gets a `velocity` column (the body's v(t); zero for static particles).
+inline constexpr Component<Vec3> rest_position{"rest_position"};
 
 }  // namespace sph::comp

@@ -6,8 +6,10 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <iomanip>
 #include <sstream>
 #include <stdexcept>
+#include <type_traits>
 
 #include "engine/components.hpp"
 #include "engine/errors.hpp"
@@ -33,18 +35,44 @@ void write_file_atomic(const std::filesystem::path& file, std::string_view conte
 
 namespace {
 
-constexpr const char* real_type() { return sizeof(Real) == 4 ? "Float32" : "Float64"; }
+/// VTK XML type names of the column types we write (VTK file formats, "DataArray" type).
+template <class T>
+constexpr const char* vtk_type() {
+    if constexpr (std::is_same_v<T, float>) return "Float32";
+    else if constexpr (std::is_same_v<T, double>) return "Float64";
+    else if constexpr (std::is_same_v<T, std::uint8_t>) return "UInt8";
+    else if constexpr (std::is_same_v<T, std::uint32_t>) return "UInt32";
+    else if constexpr (std::is_same_v<T, std::int64_t>) return "Int64";
+    else static_assert(sizeof(T) == 0, "no VTK type for this column type");
+}
 
+/// One appended DataArray: the XML element up to its offset attribute, and the raw payload.
 struct Blob {
-    std::string header;  // DataArray XML
-    std::string bytes;   // raw payload
+    std::string header;
+    std::string bytes;
 };
 
 template <class T>
-std::string raw_bytes(const T* data, std::size_t count) {
-    std::string s(sizeof(T) * count, '\0');
-    if (count) std::memcpy(s.data(), data, s.size());
-    return s;
+Blob array_blob(const std::string& name, const T* data, std::size_t count, int components = 1) {
+    std::string header = "<DataArray type=\"" + std::string(vtk_type<T>()) + "\" Name=\"" + name + "\"";
+    if (components != 1) header += " NumberOfComponents=\"" + std::to_string(components) + "\"";
+    header += " format=\"appended\" offset=\"";
+    std::string bytes(sizeof(T) * count, '\0');
+    if (count) std::memcpy(bytes.data(), data, bytes.size());
+    return Blob{std::move(header), std::move(bytes)};
+}
+
+template <class T>
+Blob column_blob(const ComponentStore& store, Component<T> c) {
+    const auto v = store.get(c);
+    return array_blob(std::string(c.name), v.data(), v.size());
+}
+
+Blob vec3_blob(const std::string& name, std::span<const Vec3> v) {
+    std::vector<Real> flat(3 * v.size());
+    for (std::size_t i = 0; i < v.size(); ++i)
+        for (int a = 0; a < 3; ++a) flat[3 * i + a] = v[i][a];
+    return array_blob(name, flat.data(), flat.size(), 3);
 }
 
 }  // namespace
@@ -54,31 +82,19 @@ void write_vtu(const std::filesystem::path& file, const World& world,
     const auto& store = world.fluid.store;
     const std::size_t n = store.size();
     std::vector<Blob> point_data;
-    auto vec3_blob = [&](const std::string& name, std::span<const Vec3> v) {
-        std::vector<Real> flat(3 * n);
-        for (std::size_t i = 0; i < n; ++i)
-            for (int a = 0; a < 3; ++a) flat[3 * i + a] = v[i][a];
-        return Blob{"<DataArray type=\"" + std::string(real_type()) + "\" Name=\"" + name +
-                        "\" NumberOfComponents=\"3\" format=\"appended\" offset=\"",
-                    raw_bytes(flat.data(), flat.size())};
-    };
-    auto scalar_blob = [&](const std::string& name, std::span<const Real> v) {
-        return Blob{"<DataArray type=\"" + std::string(real_type()) + "\" Name=\"" + name +
-                        "\" format=\"appended\" offset=\"",
-                    raw_bytes(v.data(), v.size())};
-    };
     for (const auto& a : attributes) {
         if (!store.has(a)) continue;  // e.g. acceleration in a recipe that never stores it
         if (a == "velocity" || a == "acceleration")
             point_data.push_back(vec3_blob(a, store.get(Component<Vec3>{a})));
         else
-            point_data.push_back(scalar_blob(a, store.get(Component<Real>{a})));
+            point_data.push_back(column_blob(store, Component<Real>{a}));
     }
-    if (store.has(comp::id.name)) {
-        auto ids = store.get(comp::id);
-        point_data.push_back(Blob{"<DataArray type=\"UInt32\" Name=\"id\" format=\"appended\" offset=\"",
-                                  raw_bytes(ids.data(), ids.size())});
-    }
+    // Individual stepping (the only mode that registers these columns): each particle's step
+    // Delta t_i (s, double as stored) and whether it was evaluated in the step just taken. In
+    // the other modes every particle shares the step in stats.csv, so nothing is added.
+    if (store.has(comp::dt.name)) point_data.push_back(column_blob(store, comp::dt));
+    if (store.has(comp::active.name)) point_data.push_back(column_blob(store, comp::active));
+    if (store.has(comp::id.name)) point_data.push_back(column_blob(store, comp::id));
     Blob points = vec3_blob("position", store.get(comp::position));
     std::vector<std::int64_t> conn(n), offs(n);
     std::vector<std::uint8_t> types(n, 1);  // VTK_VERTEX
@@ -86,11 +102,12 @@ void write_vtu(const std::filesystem::path& file, const World& world,
         conn[i] = std::int64_t(i);
         offs[i] = std::int64_t(i + 1);
     }
-    Blob c_conn{"<DataArray type=\"Int64\" Name=\"connectivity\" format=\"appended\" offset=\"",
-                raw_bytes(conn.data(), n)};
-    Blob c_offs{"<DataArray type=\"Int64\" Name=\"offsets\" format=\"appended\" offset=\"", raw_bytes(offs.data(), n)};
-    Blob c_types{"<DataArray type=\"UInt8\" Name=\"types\" format=\"appended\" offset=\"", raw_bytes(types.data(), n)};
+    const Blob c_conn = array_blob("connectivity", conn.data(), n);
+    const Blob c_offs = array_blob("offsets", offs.data(), n);
+    const Blob c_types = array_blob("types", types.data(), n);
 
+    // Appended raw data: each array's bytes are preceded by their byte count as one integer of
+    // the file's header_type (UInt64 here); `offset` counts from the byte after the '_'.
     std::ostringstream xml;
     std::string appended;
     std::uint64_t offset = 0;
@@ -104,8 +121,9 @@ void write_vtu(const std::filesystem::path& file, const World& world,
     xml << "<?xml version=\"1.0\"?>\n"
         << "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n"
         << "  <UnstructuredGrid>\n"
+        // Full precision, so a frame's time matches the end of a stats.csv step exactly.
         << "    <FieldData>\n      <DataArray type=\"Float64\" Name=\"TimeValue\" NumberOfTuples=\"1\" format=\"ascii\">"
-        << world.step.t << "</DataArray>\n    </FieldData>\n"
+        << std::setprecision(17) << world.step.t << "</DataArray>\n    </FieldData>\n"
         << "    <Piece NumberOfPoints=\"" << n << "\" NumberOfCells=\"" << n << "\">\n";
     xml << "      <PointData>\n";
     for (const auto& b : point_data) emit(b);

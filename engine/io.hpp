@@ -15,7 +15,9 @@ struct World;
 void write_file_atomic(const std::filesystem::path& file, std::string_view content);
 
 /// @brief Writes the fluid particles as a VTK UnstructuredGrid (.vtu), binary appended raw
-/// data, with the given point attributes (columns of the fluid store) for ParaView.
+/// data, with the given point attributes (columns of the fluid store) for ParaView, then
+/// `dt` (Float64, s) and `active` (UInt8) when the store has them (individual stepping),
+/// then `id`. Field data `TimeValue` holds the simulated time at full precision.
 void write_vtu(const std::filesystem::path& file, const World& world,
                const std::vector<std::string>& attributes);
 

@@ -59,6 +59,23 @@ const char* to_string(BoundaryShape s) {
     return "unknown";
 }
 
+Vec3d reference_point(const BoundaryDesc& b) {
+    return b.shape == BoundaryShape::Sphere ? b.center : Vec3d(0.5 * (b.box.min + b.box.max));
+}
+
+BoundaryDesc translated(const BoundaryDesc& b, const Vec3d& d) {
+    BoundaryDesc out = b;
+    out.box.min += d;
+    out.box.max += d;
+    out.center += d;
+    return out;
+}
+
+bool has_moving_boundaries(const Scene& scene) {
+    return std::any_of(scene.boundaries.begin(), scene.boundaries.end(),
+                       [](const BoundaryDesc& b) { return b.motion.has_value(); });
+}
+
 double Scene::particle_radius() const {
     return fluid.particle_radius / std::cbrt(simulation.scale);
 }
@@ -77,8 +94,14 @@ constexpr std::array<const char*, 5> k_fluid_keys{"rest_density", "particle_radi
                                                   "speed_of_sound", "density_fluctuation"};
 constexpr std::array<const char*, 2> k_box_keys{"min", "max"};
 constexpr std::array<const char*, 4> k_block_keys{"min", "max", "velocity", "hydrostatic"};
-constexpr std::array<const char*, 3> k_boxlike_boundary_keys{"type", "min", "max"};
-constexpr std::array<const char*, 3> k_sphere_boundary_keys{"type", "center", "radius"};
+constexpr std::array<const char*, 4> k_boxlike_boundary_keys{"type", "min", "max", "motion"};
+constexpr std::array<const char*, 4> k_sphere_boundary_keys{"type", "center", "radius", "motion"};
+constexpr std::array<const char*, 2> k_linear_motion_keys{"type", "velocity"};
+constexpr std::array<const char*, 5> k_sinusoidal_motion_keys{"type", "axis", "amplitude", "period",
+                                                              "phase"};
+constexpr std::array<const char*, 4> k_path_motion_keys{"type", "points", "speed", "loop"};
+constexpr std::array<const char*, 5> k_circle_motion_keys{"type", "center", "radius", "axis",
+                                                          "speed"};
 constexpr std::array<const char*, 2> k_output_keys{"format", "attributes"};
 
 constexpr const char* k_name_expected =
@@ -89,6 +112,8 @@ constexpr std::array<SteppingMode, 3> k_modes{SteppingMode::Constant, SteppingMo
                                               SteppingMode::Individual};
 constexpr std::array<BoundaryShape, 3> k_shapes{BoundaryShape::Container, BoundaryShape::Box,
                                                 BoundaryShape::Sphere};
+constexpr std::array<MotionType, 4> k_motion_types{MotionType::Linear, MotionType::Sinusoidal,
+                                                  MotionType::Path, MotionType::Circle};
 constexpr std::array<const char*, 1> k_formats{"vtu"};
 constexpr std::array<const char*, 4> k_attributes{"velocity", "density", "pressure",
                                                   "acceleration"};
@@ -153,6 +178,9 @@ std::string fmt_computed(double x) {
 
 std::string fmt_vec(const Vec3d& v) {
     return "[" + fmt_num(v[0]) + "," + fmt_num(v[1]) + "," + fmt_num(v[2]) + "]";
+}
+std::string fmt_vec_computed(const Vec3d& v) {
+    return "[" + fmt_computed(v[0]) + "," + fmt_computed(v[1]) + "," + fmt_computed(v[2]) + "]";
 }
 
 /// Plain digits up to 1e15 ("125000000000000"), then 3 significant digits; never "inf".
@@ -872,7 +900,99 @@ class Reader {
             check_keys(n, k_boxlike_boundary_keys, context);
             b.box = read_box(n);
         }
+        if (const json* v = n.find("motion")) b.motion = read_motion(n.at(*v, "motion"), b);
         return b;
+    }
+
+    double required_number(const Node& obj, const char* key, const Range& range) const {
+        const json* v = obj.find(key);
+        if (!v) fail(child(obj.path, key), "nothing", range.describe());
+        return number(obj.at(*v, key), range);
+    }
+
+    /// A direction: any non-zero vector, returned normalised.
+    Vec3d direction(const Node& obj, const char* key) const {
+        const char* what = "an array of 3 numbers, not all zero (a direction; it is normalised)";
+        const json* v = obj.find(key);
+        if (!v) fail(child(obj.path, key), "nothing", what);
+        const Node a = obj.at(*v, key);
+        const Vec3d d = vec3(a, "a direction; it is normalised");
+        if (!(d.norm() > 0) || !std::isfinite(d.norm())) fail(a.path, dump(a.value), what);
+        return d.normalized();
+    }
+
+    /// A kinematic motion (engine/motion.hpp); `body` is the boundary it moves (a circle
+    /// carries the body's centre round it, so that centre must lie on the circle).
+    Motion read_motion(const Node& n, const BoundaryDesc& body) const {
+        require_object(n, "an object with a type (a motion)");
+        std::array<const char*, k_motion_types.size()> names{};
+        for (std::size_t i = 0; i < names.size(); ++i) names[i] = to_string(k_motion_types[i]);
+        const json* type = n.find("type");
+        if (!type) fail(child(n.path, "type"), "nothing", "one of " + join(names, true));
+        Motion m;
+        m.type = pick_enum(n.at(*type, "type"), k_motion_types);
+        const std::string context = " for a " + in_quotes(to_string(m.type)) + " motion";
+        switch (m.type) {
+            case MotionType::Linear:
+                check_keys(n, k_linear_motion_keys, context);
+                m.velocity = required_vec3(n, "velocity", "m/s");
+                break;
+            case MotionType::Sinusoidal:
+                check_keys(n, k_sinusoidal_motion_keys, context);
+                m.axis = direction(n, "axis");
+                m.amplitude = required_number(n, "amplitude", positive("metres"));
+                m.period = required_number(n, "period", positive("seconds"));
+                read_number(n, "phase", any_number("radians"), m.phase);
+                break;
+            case MotionType::Path: {
+                check_keys(n, k_path_motion_keys, context);
+                const char* what = "an array of at least 2 points, each an array of 3 numbers (metres)";
+                const json* v = n.find("points");
+                if (!v) fail(child(n.path, "points"), "nothing", what);
+                const Node pts = n.at(*v, "points");
+                if (!v->is_array() || v->size() < 2) fail(pts.path, dump(*v), what);
+                for (std::size_t i = 0; i < v->size(); ++i) {
+                    const Node e{(*v)[i], child(pts.path, i)};
+                    const Vec3d p = vec3(e, "metres");
+                    if (i > 0 && p == m.points.back()) {
+                        fail(e.path, dump(e.value),
+                             "a point different from the previous one " + fmt_vec(m.points.back()) +
+                                 " (metres)");
+                    }
+                    m.points.push_back(p);
+                }
+                m.speed = required_number(n, "speed", positive("m/s along the path"));
+                if (const json* l = n.find("loop")) {
+                    if (!l->is_boolean()) fail(child(n.path, "loop"), dump(*l), "true or false");
+                    m.loop = l->get<bool>();
+                }
+                break;
+            }
+            case MotionType::Circle: {
+                check_keys(n, k_circle_motion_keys, context);
+                m.center = required_vec3(n, "center", "metres");
+                m.radius = required_number(n, "radius", positive("metres"));
+                m.axis = direction(n, "axis");
+                m.speed = required_number(n, "speed", positive("m/s along the circle"));
+                // The body is translated round the circle: its centre must start on it.
+                const Vec3d rel = reference_point(body) - m.center;
+                const Vec3d in_plane = rel - rel.dot(m.axis) * m.axis;
+                const double distance = in_plane.norm();
+                if (std::abs(distance - m.radius) > 1e-6 * std::max(1.0, m.radius) || !(distance > 0)) {
+                    const std::string radius_path = child(n.path, "radius");
+                    fail_at(radius_path, dump_at(radius_path),
+                            "the distance from center to the boundary's centre " +
+                                fmt_vec(reference_point(body)) + " in the circle's plane, " +
+                                fmt_computed(distance) +
+                                " (metres; the boundary is carried round the circle from where it "
+                                "is declared)",
+                            {radius_path, child(n.path, "center"), child(n.path, "axis")});
+                }
+                m.start = in_plane / distance;
+                break;
+            }
+        }
+        return m;
     }
 
     void read_output(const Node& n, OutputParams& p) const {
@@ -918,23 +1038,29 @@ class Reader {
                         {path, "/domain"});
             }
             for (std::size_t j = 0; j < s.boundaries.size(); ++j) {
-                const BoundaryDesc& b = s.boundaries[j];
-                const std::string bpath = child("/boundaries", j);
-                const std::string where = " " + bpath + " (min " + fmt_vec(b.box.min) + ", max " +
-                                          fmt_vec(b.box.max) + ")";
+                // A moving boundary is checked where it is at t = 0 (a sinusoid with a phase
+                // starts displaced); every other motion starts at its declared geometry.
+                const BoundaryDesc& declared = s.boundaries[j];
+                const Vec3d d0 = declared.motion ? displacement(*declared.motion, 0.0) : Vec3d::Zero();
+                const BoundaryDesc b = declared.motion ? translated(declared, d0) : declared;
+                const bool shifted = d0 != Vec3d::Zero();
+                const auto vec = [&](const Vec3d& v) { return shifted ? fmt_vec_computed(v) : fmt_vec(v); };
+                const std::string bpath = child("/boundaries", j) + (shifted ? " at t = 0" : "");
+                const std::string where = " " + bpath + " (min " + vec(b.box.min) + ", max " +
+                                          vec(b.box.max) + ")";
                 if (b.shape == BoundaryShape::Container && !inside(box, b.box)) {
                     fail_at(path, dump_at(path), "a block inside the container" + where,
-                            {path, bpath});
+                            {path, child("/boundaries", j)});
                 }
                 if (b.shape == BoundaryShape::Box && overlaps(box, b.box)) {
                     fail_at(path, dump_at(path), "a block clear of the box obstacle" + where,
-                            {path, bpath});
+                            {path, child("/boundaries", j)});
                 }
                 if (b.shape == BoundaryShape::Sphere && overlaps(box, b.center, b.radius)) {
                     fail_at(path, dump_at(path),
                             "a block clear of the sphere " + bpath + " (center " +
-                                fmt_vec(b.center) + ", radius " + fmt_num(b.radius) + ")",
-                            {path, bpath});
+                                vec(b.center) + ", radius " + fmt_num(b.radius) + ")",
+                            {path, child("/boundaries", j)});
                 }
             }
             if (lattice_cells(box, spacing).minCoeff() < 1.0) {

@@ -9,6 +9,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "engine/motion.hpp"
 #include "engine/types.hpp"
 
 namespace sph {
@@ -74,15 +75,23 @@ struct FluidBlock {
 enum class BoundaryShape { Container, Box, Sphere };
 const char* to_string(BoundaryShape s);
 
-/// @brief A static rigid boundary sampled with particles (Akinci et al. 2012).
+/// @brief A rigid boundary sampled with particles (Akinci et al. 2012).
 /// `container`: the inside of a box holds the fluid (its six walls are sampled);
-/// `box`: a solid obstacle; `sphere`: a solid ball.
+/// `box`: a solid obstacle; `sphere`: a solid ball. Static unless it has a `motion`, a
+/// prescribed translation (engine/motion.hpp): the declared geometry is its position at
+/// displacement zero, and at time t every point of it is moved by displacement(motion, t).
 struct BoundaryDesc {
     BoundaryShape shape = BoundaryShape::Container;
     Aabb box;                 ///< container, box
     Vec3d center{0, 0, 0};    ///< sphere
     double radius = 0.0;      ///< sphere, m
+    std::optional<Motion> motion;  ///< none: static
 };
+
+/// @brief The point a circle motion carries round its circle: the centre of the box or sphere.
+Vec3d reference_point(const BoundaryDesc& b);
+/// @brief The same boundary moved by `d` metres (its motion is kept).
+BoundaryDesc translated(const BoundaryDesc& b, const Vec3d& d);
 
 enum class FrameFormat { Vtu };
 
@@ -120,6 +129,9 @@ struct Scene {
     /// @brief Particle radius after `scale`.
     double particle_radius() const;
 };
+
+/// @brief True when any boundary of the scene has a motion.
+bool has_moving_boundaries(const Scene& scene);
 
 /// @brief Loads and validates a scene file. Throws SceneError (a typed InputError) naming the
 /// file, the JSON path, the value found and what was expected.

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <sstream>
+#include <tuple>
 
 #include "engine/components.hpp"
 #include "engine/errors.hpp"
@@ -33,12 +34,15 @@ Aabb default_domain(const Scene& scene, double h) {
         box.max = box.max.cwiseMax(p);
     };
     for (const auto& b : scene.boundaries) {
+        // A moving boundary covers its geometry swept by its displacement up to the end time.
+        Vec3d lo = Vec3d::Zero(), hi = Vec3d::Zero();
+        if (b.motion) std::tie(lo, hi) = displacement_bounds(*b.motion, scene.simulation.end_time);
         if (b.shape == BoundaryShape::Sphere) {
-            grow(b.center - Vec3d::Constant(b.radius));
-            grow(b.center + Vec3d::Constant(b.radius));
+            grow(b.center - Vec3d::Constant(b.radius) + lo);
+            grow(b.center + Vec3d::Constant(b.radius) + hi);
         } else {
-            grow(b.box.min);
-            grow(b.box.max);
+            grow(b.box.min + lo);
+            grow(b.box.max + hi);
         }
     }
     for (const auto& f : scene.fluid_blocks) {
@@ -84,16 +88,30 @@ void initialise_world(World& w, const Scene& scene) {
     fs.add(comp::id);
     fs.resize(xs.size());
 
-    // Boundary particles (static: sampled once, at the fluid spacing r0 = 2 r = h / 2).
+    // Boundary particles, sampled once at the fluid spacing r0 = 2 r = h / 2: the static
+    // boundaries first, then each moving boundary as one contiguous range (a moving body).
     std::vector<Vec3d> bx, bn;
-    for (const auto& b : scene.boundaries) {
-        auto s = sample_boundary(b, 2 * r, r);
-        bx.insert(bx.end(), s.positions.begin(), s.positions.end());
-        bn.insert(bn.end(), s.normals.begin(), s.normals.end());
+    w.moving_bodies.clear();
+    for (const bool moving : {false, true}) {
+        for (std::size_t j = 0; j < scene.boundaries.size(); ++j) {
+            const auto& b = scene.boundaries[j];
+            if (b.motion.has_value() != moving) continue;
+            auto s = sample_boundary(b, 2 * r, r);
+            const std::size_t begin = bx.size();
+            bx.insert(bx.end(), s.positions.begin(), s.positions.end());
+            bn.insert(bn.end(), s.normals.begin(), s.normals.end());
+            if (moving) w.moving_bodies.push_back(MovingBody{begin, bx.size(), j, Aabb{}, 0.0});
+        }
+        if (!moving) w.static_boundary_end = bx.size();
     }
     auto& bs = w.boundary.store;
     bs.add(comp::position);
     bs.add(comp::normal);
+    // Only scenes with a moving boundary get its columns (static scenes are unchanged).
+    if (!w.moving_bodies.empty()) {
+        bs.add(comp::rest_position);
+        bs.add(comp::velocity);
+    }
     bs.resize(bx.size());
     {
         auto x = bs.get(comp::position);
@@ -102,6 +120,30 @@ void initialise_world(World& w, const Scene& scene) {
             x[i] = bx[i].cast<Real>();
             n[i] = bn[i].cast<Real>();
         }
+    }
+    if (!w.moving_bodies.empty()) {
+        // x0 is the sampled position; at t = 0 a body is at x0 + d(0) with velocity v(0)
+        // (d(0) is zero except for a sinusoid with a phase). BoundaryMotionSystem does the same
+        // at the start of every step.
+        auto x = bs.get(comp::position);
+        auto x0 = bs.get(comp::rest_position);
+        auto vb = bs.get(comp::velocity);
+        for (MovingBody& body : w.moving_bodies) {
+            const Motion& motion = *scene.boundaries[body.boundary].motion;
+            const Vec3d d = displacement(motion, 0.0);
+            const Vec3 v = velocity(motion, 0.0).cast<Real>();
+            body.bounds = Aabb{Vec3d::Constant(std::numeric_limits<double>::max()),
+                               Vec3d::Constant(std::numeric_limits<double>::lowest())};
+            for (std::size_t i = body.begin; i < body.end; ++i) {
+                x0[i] = x[i];
+                x[i] = (x0[i].cast<double>() + d).cast<Real>();
+                vb[i] = v;
+                body.bounds.min = body.bounds.min.cwiseMin(x[i].cast<double>());
+                body.bounds.max = body.bounds.max.cwiseMax(x[i].cast<double>());
+            }
+            body.speed = speed_bound(motion, 0.0);
+        }
+        for (std::size_t i = 0; i < w.static_boundary_end; ++i) x0[i] = x[i];
     }
 
     // Speed of sound: density fluctuation ~ (v_ref / c_s)^2 (Monaghan 1994) with
@@ -176,10 +218,19 @@ void initialise_world(World& w, const Scene& scene) {
         bbox.min = bbox.min.cwiseMin(p);
         bbox.max = bbox.max.cwiseMax(p);
     }
+    for (const MovingBody& body : w.moving_bodies) {
+        bbox.min = bbox.min.cwiseMin(body.bounds.min);
+        bbox.max = bbox.max.cwiseMax(body.bounds.max);
+    }
     w.boundary_grid = UniformGrid(bbox, ph.h);
     if (!bx.empty()) {
-        // Boundary particles never move: store them in z-order once, then index the grid.
-        bs.permute(zorder_permutation(w.boundary_grid, bs.get(comp::position)));
+        // Static boundary particles never move: store them in z-order once, then index the
+        // grid. Moving bodies keep their ranges (the permutation is the identity there); the
+        // boundary motion system rebuilds the grid every step.
+        const std::span<const Vec3> all = bs.get(comp::position);
+        std::vector<Index> perm = zorder_permutation(w.boundary_grid, all.subspan(0, w.static_boundary_end));
+        for (std::size_t i = w.static_boundary_end; i < all.size(); ++i) perm.push_back(Index(i));
+        bs.permute(perm);
         w.boundary_grid.build(bs.get(comp::position));
     }
     w.step = StepState{};

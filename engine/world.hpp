@@ -95,12 +95,16 @@ struct StepState {
 };
 
 /// @brief A boundary that moves with a kinematic motion: its boundary particles are the
-/// contiguous range [begin, end) of the boundary store. Updated every step by the boundary
-/// motion system; read by individual stepping to wake fluid particles it comes near.
+/// contiguous range [begin, end) of the boundary store (after the static particles). Updated
+/// every step by the boundary motion system; read by individual stepping to wake fluid
+/// particles it comes near.
 struct MovingBody {
     std::size_t begin = 0, end = 0;  ///< boundary particle range
+    std::size_t boundary = 0;        ///< index of its description in scene.boundaries
     Aabb bounds;                     ///< current bounding box of its boundary particles, m
-    double speed = 0;                ///< current largest speed of any of its points, m/s
+    /// Bound on the speed of its points from now on, m/s (speed_bound of its motion; a
+    /// translation moves every point at the same speed).
+    double speed = 0;
 };
 
 struct ParticleSet {
@@ -123,8 +127,10 @@ struct World {
     /// active particles (ascending), both rebuilt each step.
     std::vector<Index> active_set;
     std::vector<Index> halo_set;
-    /// Boundaries with a motion (empty when every boundary is static).
+    /// Boundaries with a motion (empty when every boundary is static), in scene order.
     std::vector<MovingBody> moving_bodies;
+    /// Boundary particles [0, static_boundary_end) never move (z-ordered once).
+    std::size_t static_boundary_end = 0;
     StepState step;
 };
 

@@ -1,19 +1,26 @@
 // Position projection onto the declared boundary surfaces and removal of the velocity
 // component into the wall (cf. Ihmsen et al. 2010, eq. 9-12, with the analytic surface normal).
+// A moving boundary is handled in its own frame: its surface is moved by d(t + dt) and the
+// velocity relative to it, v - v_b, loses its component into the body.
 #include "systems/boundary/boundary_collision_system.hpp"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_reduce.h>
 
+#include <vector>
+
 #include "engine/components.hpp"
+#include "engine/motion.hpp"
 #include "engine/world.hpp"
 
 namespace sph {
 
 Access BoundaryCollisionSystem::access() const {
-    return {{res::fluid(comp::position.name), res::fluid(comp::velocity.name)},
-            {res::fluid(comp::position.name), res::fluid(comp::velocity.name), res::collisions,
-             res::fluid(comp::wake.name)}};
+    Access a{{res::fluid(comp::position.name), res::fluid(comp::velocity.name)},
+             {res::fluid(comp::position.name), res::fluid(comp::velocity.name), res::collisions,
+              res::fluid(comp::wake.name)}};
+    if (m_moving) a.reads.push_back(res::dt);  // the body's position at the step's end
+    return a;
 }
 
 namespace {
@@ -72,7 +79,20 @@ bool collide(const BoundaryDesc& b, Vec3& x, Vec3& v) {
 void BoundaryCollisionSystem::run(World& w) {
     auto x = w.fluid.store.get(comp::position);
     auto v = w.fluid.store.get(comp::velocity);
-    const auto& boundaries = w.scene.boundaries;
+    // Each boundary where it is at the end of this step (t + dt), and its velocity then. A
+    // static boundary is its declared self with zero velocity.
+    std::vector<BoundaryDesc> boundaries = w.scene.boundaries;
+    std::vector<Vec3> body_velocity(boundaries.size(), Vec3::Zero());
+    bool any_moving = false;
+    if (m_moving) {
+        const double t_end = to_seconds(w.step.t_ticks + w.step.dt_ticks);
+        for (std::size_t j = 0; j < boundaries.size(); ++j) {
+            if (!boundaries[j].motion) continue;
+            boundaries[j] = translated(boundaries[j], displacement(*boundaries[j].motion, t_end));
+            body_velocity[j] = velocity(*boundaries[j].motion, t_end).cast<Real>();
+            any_moving = true;
+        }
+    }
     const std::span<std::uint8_t> wake =
         w.fluid.store.has(comp::wake.name) ? w.fluid.store.get(comp::wake) : std::span<std::uint8_t>{};
     w.step.collisions = tbb::parallel_reduce(
@@ -80,7 +100,19 @@ void BoundaryCollisionSystem::run(World& w) {
         [&](const auto& r, std::uint64_t count) {
             for (std::size_t i = r.begin(); i < r.end(); ++i) {
                 bool hit = false;
-                for (const auto& b : boundaries) hit |= collide(b, x[i], v[i]);
+                if (!any_moving) {
+                    for (const auto& b : boundaries) hit |= collide(b, x[i], v[i]);
+                } else {
+                    for (std::size_t j = 0; j < boundaries.size(); ++j) {
+                        // Reflect/clamp the velocity relative to the body (Ihmsen 2010 eq. 11-12
+                        // in the body's frame), then return to the world frame.
+                        Vec3 rel = v[i] - body_velocity[j];
+                        if (collide(boundaries[j], x[i], rel)) {
+                            v[i] = rel + body_velocity[j];
+                            hit = true;
+                        }
+                    }
+                }
                 // Individual stepping: the corrected state must become the particle's base
                 // state, so it is evaluated at the next step (SelectActiveSystem reads wake).
                 if (hit && !wake.empty()) wake[i] = 1;

@@ -13,11 +13,18 @@
 
 namespace sph {
 
+/// Moving boundaries (`moving`): the surface is the declared one moved by the body's
+/// displacement d(t + dt), where the body will be at the start of the next step, and the
+/// relative velocity v - v_b(t + dt) is what gets its component into the body removed.
 class BoundaryCollisionSystem final : public System {
 public:
+    explicit BoundaryCollisionSystem(bool moving = false) : m_moving(moving) {}
     std::string name() const override { return "boundary_collision"; }
     Access access() const override;
     void run(World& w) override;
+
+private:
+    bool m_moving;
 };
 
 }  // namespace sph

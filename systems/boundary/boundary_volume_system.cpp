@@ -5,6 +5,8 @@
 #include <tbb/parallel_for.h>
 
 #include <cmath>
+#include <cstdint>
+#include <vector>
 
 #include "engine/components.hpp"
 #include "engine/world.hpp"
@@ -20,7 +22,8 @@ Real boundary_volume_gamma(const CubicSpline& kernel, Real spacing) {
 }
 
 Access BoundaryVolumeSystem::access() const {
-    return {{res::boundary(comp::position.name), res::boundary_grid}, {res::boundary(comp::volume.name)}};
+    return {{res::boundary(comp::position.name), res::boundary_grid, res::moving_bodies},
+            {res::boundary(comp::volume.name)}};
 }
 
 void BoundaryVolumeSystem::register_components(World& w) { w.boundary.store.add(comp::volume); }
@@ -31,10 +34,25 @@ void BoundaryVolumeSystem::run(World& w) {
     const CubicSpline& kernel = w.kernel;
     const Real h2 = kernel.support() * kernel.support();
     const Real gamma = boundary_volume_gamma(kernel, w.physics.spacing);
+    // Moving bodies: Akinci eq. 4 sums over the boundary particles k of the particle's *own*
+    // rigid object only: the static boundaries form one group, each moving body another. A
+    // body's volumes then depend only on its own sampling, are invariant under its rigid
+    // translation, and are computed once here rather than every step; the alternative (the sum
+    // over every boundary particle, recomputed per step) would let a body passing a wall shrink
+    // both its own and the wall's psi_b = rho0 V_b and so weaken both walls exactly where the
+    // fluid between them is squeezed. Static scenes have one group (every particle), unchanged.
+    std::vector<std::uint32_t> group;
+    if (!w.moving_bodies.empty()) {
+        group.assign(x.size(), 0);
+        for (std::size_t k = 0; k < w.moving_bodies.size(); ++k)
+            for (std::size_t i = w.moving_bodies[k].begin; i < w.moving_bodies[k].end; ++i)
+                group[i] = std::uint32_t(k + 1);
+    }
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 1024), [&](const auto& r) {
         for (std::size_t b = r.begin(); b < r.end(); ++b) {
             Real sum = 0;
-            w.boundary_grid.for_each_candidate(x[b], [&](Index, const Vec3& xk) {
+            w.boundary_grid.for_each_candidate(x[b], [&](Index k, const Vec3& xk) {
+                if (!group.empty() && group[k] != group[b]) return;
                 const Real d2 = (x[b] - xk).squaredNorm();
                 if (d2 < h2) sum += kernel.w(std::sqrt(d2));
             });

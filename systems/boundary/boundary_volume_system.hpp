@@ -9,6 +9,9 @@
 /// resting one spacing from it has exactly rho0. Unscaled, eq. 4 gives 1.36 s^3 with the cubic
 /// spline at h = 2 s, and the first fluid layer starts 6 % over-dense (a 120 kPa pressure spike
 /// in dam_break). Curved walls, edges and corners keep Akinci's relative correction.
+///
+/// Moving bodies: the sum runs over the particle's own rigid object (static boundaries, or
+/// one moving body), so a body's volumes are constant under its translation and computed once.
 #include "engine/kernel.hpp"
 #include "engine/system.hpp"
 

@@ -2,9 +2,12 @@
 // plus Monaghan 1992 artificial viscosity -sum_j m_j Pi_ij grad W_ij (forces_kernels.hpp).
 // Boundary (Akinci et al. 2012 eq. 10 with pressure mirroring p_b = p_i, rho_b = rho_i):
 // a_i -= sum_b psi_b (2 p_i / rho_i^2) grad W_ib, psi_b = rho0 V_b; viscosity against the wall
-// uses the same Pi with rho_j = rho0 and the wall's velocity (zero for static walls).
+// uses the same Pi with rho_j = rho0 and the wall's velocity (zero for static walls): for a
+// moving boundary, Pi_ib is evaluated with the relative velocity v_ib = v_i - v_b (Akinci et
+// al. 2012 sec. 3.3, eq. 11-12: the boundary viscosity acts on the velocity relative to the
+// rigid body), so a body drags the fluid along and fluid moving with it feels no friction.
 // Individual stepping (He Alg. 2 lines 10-13): active particles only, plus
-// drho_i/dt = sum_j m_j v_ij . grad W_ij + sum_b psi_b v_i . grad W_ib (He eq. 5) and
+// drho_i/dt = sum_j m_j v_ij . grad W_ij + sum_b psi_b v_ib . grad W_ib (He eq. 5) and
 // Delta t_i^raw = min(lambda_v h/|v_i|, lambda_f sqrt(h/|a_i|)) (line 13; the same function
 // as the global step, so that equal steps reproduce `global` exactly).
 #include "systems/forces/forces_system.hpp"
@@ -28,6 +31,7 @@ Access ForcesSystem::access() const {
     if (m_with_boundary)
         a.reads.insert(a.reads.end(), {res::boundary_neighbours, res::boundary(comp::position.name),
                                        res::boundary(comp::volume.name)});
+    if (m_with_boundary && m_moving_boundary) a.reads.push_back(res::boundary(comp::velocity.name));
     if (m_individual) {
         a.reads.push_back(res::active_set);
         a.writes.insert(a.writes.end(), {res::fluid(comp::drho_dt.name), res::fluid(comp::dt_raw.name),
@@ -54,6 +58,12 @@ void ForcesSystem::run(World& w) {
     const bool has_boundary = m_with_boundary && w.boundary.size() > 0;
     const auto xb = w.boundary.store.get(comp::position);
     const std::span<const Real> vb = has_boundary ? w.boundary.store.get(comp::volume) : std::span<const Real>{};
+    // Boundary velocities (moving bodies; zero rows for static particles). Absent in static
+    // scenes, whose arithmetic is then exactly the static formula.
+    const std::span<const Vec3> vel_b = has_boundary && m_moving_boundary && w.boundary.store.has(comp::velocity.name)
+                                            ? std::span<const Vec3>(w.boundary.store.get(comp::velocity))
+                                            : std::span<const Vec3>{};
+    const bool moving = !vel_b.empty();
     const CubicSpline& kernel = w.kernel;
     const Physics& ph = w.physics;
     const Real m = ph.mass, alpha = ph.viscosity, c = ph.speed_of_sound, h = ph.h, rho0 = ph.rest_density;
@@ -85,9 +95,10 @@ void ForcesSystem::run(World& w) {
                 const Vec3 xib = xi - xb[b];
                 const Real r2 = xib.squaredNorm();
                 const Vec3 grad = kernel.grad(xib, std::sqrt(r2));
-                const Real visc = alpha > 0 ? monaghan_pi(vi.dot(xib), r2, alpha, c, h, rhoi, rho0) : Real(0);
+                const Vec3 vib = moving ? Vec3(vi - vel_b[b]) : vi;  // relative velocity v_i - v_b
+                const Real visc = alpha > 0 ? monaghan_pi(vib.dot(xib), r2, alpha, c, h, rhoi, rho0) : Real(0);
                 a -= (rho0 * vb[b] * (Real(2) * pi + visc)) * grad;
-                if (m_individual) div += rho0 * vb[b] * vi.dot(grad);
+                if (m_individual) div += rho0 * vb[b] * vib.dot(grad);  // He eq. 5, boundary term
             }
         }
         acc[i] = a + g;

@@ -2,6 +2,7 @@
 
 #include "systems/active/select_active_system.hpp"
 #include "systems/boundary/boundary_collision_system.hpp"
+#include "systems/boundary/boundary_motion_system.hpp"
 #include "systems/boundary/boundary_volume_system.hpp"
 #include "systems/density/density_system.hpp"
 #include "systems/forces/forces_system.hpp"
@@ -19,7 +20,10 @@ Recipe make_wcsph_recipe(const Scene& scene) {
     const bool boundary = !scene.boundaries.empty();
     const SteppingMode mode = scene.simulation.stepping.mode;
     const bool individual = mode == SteppingMode::Individual;
+    const bool moving = has_moving_boundaries(scene);
     if (boundary) r.setup.push_back(std::make_unique<BoundaryVolumeSystem>());
+    // Kinematic boundaries are placed at the step's time before anything reads them.
+    if (moving) r.step.push_back(std::make_unique<BoundaryMotionSystem>());
     // He et al. Alg. 2 (individual) or Alg. 1 with eq. 6-8 (global) / a fixed step (constant).
     if (individual) r.step.push_back(std::make_unique<SelectActiveSystem>());
     r.step.push_back(std::make_unique<FluidGridSystem>());
@@ -27,7 +31,7 @@ Recipe make_wcsph_recipe(const Scene& scene) {
     if (boundary) r.step.push_back(std::make_unique<BoundaryNeighbourSystem>(individual));
     if (individual) r.step.push_back(std::make_unique<HaloSystem>(boundary));
     r.step.push_back(std::make_unique<DensitySystem>(boundary, individual));
-    r.step.push_back(std::make_unique<ForcesSystem>(boundary, individual));
+    r.step.push_back(std::make_unique<ForcesSystem>(boundary, individual, moving));
     r.step.push_back(std::make_unique<StepStatsSystem>(individual));
     if (individual) {
         r.step.push_back(std::make_unique<DtPropagationSystem>());
@@ -37,7 +41,7 @@ Recipe make_wcsph_recipe(const Scene& scene) {
         if (mode == SteppingMode::Global) r.step.push_back(std::make_unique<GlobalDtSystem>());
         r.step.push_back(std::make_unique<SymplecticEulerSystem>());
     }
-    if (boundary) r.step.push_back(std::make_unique<BoundaryCollisionSystem>());
+    if (boundary) r.step.push_back(std::make_unique<BoundaryCollisionSystem>(moving));
     return r;
 }
 

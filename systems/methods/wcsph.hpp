@@ -1,7 +1,8 @@
 #pragma once
 /// @file wcsph.hpp
 /// @brief Methods are recipes of systems chosen from the scene: no boundary systems without
-/// boundaries, no dt system for `constant` stepping.
+/// boundaries, no boundary_motion system without a moving boundary, no dt system for
+/// `constant` stepping.
 #include <memory>
 
 #include "engine/simulation.hpp"

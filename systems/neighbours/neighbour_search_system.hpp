@@ -29,8 +29,9 @@ private:
     bool m_individual;
 };
 
-/// @brief Fluid->boundary neighbour lists (r < h) against the static boundary grid, of every
-/// fluid particle or of the active ones.
+/// @brief Fluid->boundary neighbour lists (r < h) against the boundary grid (built once for
+/// static boundaries, every step by boundary_motion when a body moves), of every fluid
+/// particle or of the active ones.
 class BoundaryNeighbourSystem final : public System {
 public:
     explicit BoundaryNeighbourSystem(bool individual = false) : m_individual(individual) {}

@@ -1,0 +1,61 @@
+// Kinematic boundaries: x_b(t) = x0_b + d(t), v_b(t) = d'(t) for every particle b of a moving
+// body (a rigid translation; Akinci et al. 2012 sec. 3 move boundary particles with their body).
+#include "systems/boundary/boundary_motion_system.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
+#include <limits>
+
+#include "engine/components.hpp"
+#include "engine/motion.hpp"
+#include "engine/world.hpp"
+
+namespace sph {
+
+Access BoundaryMotionSystem::access() const {
+    return {{res::boundary(comp::rest_position.name)},
+            {res::boundary(comp::position.name), res::boundary(comp::velocity.name), res::boundary_grid,
+             res::moving_bodies}};
+}
+
+void BoundaryMotionSystem::register_components(World& w) {
+    // Normally registered and filled by initialise_world already (idempotent).
+    w.boundary.store.add(comp::rest_position);
+    w.boundary.store.add(comp::velocity);
+}
+
+void BoundaryMotionSystem::run(World& w) {
+    auto x = w.boundary.store.get(comp::position);
+    auto vb = w.boundary.store.get(comp::velocity);
+    const auto x0 = w.boundary.store.get(comp::rest_position);
+    const double t = w.step.t;
+    for (MovingBody& body : w.moving_bodies) {
+        const Motion& motion = *w.scene.boundaries[body.boundary].motion;
+        const Vec3d d = displacement(motion, t);
+        const Vec3 v = velocity(motion, t).cast<Real>();
+        using Box = std::pair<Vec3d, Vec3d>;
+        const Box empty{Vec3d::Constant(std::numeric_limits<double>::max()),
+                        Vec3d::Constant(std::numeric_limits<double>::lowest())};
+        const Box box = tbb::parallel_reduce(
+            tbb::blocked_range<std::size_t>(body.begin, body.end, 2048), empty,
+            [&](const auto& r, Box b) {
+                for (std::size_t i = r.begin(); i < r.end(); ++i) {
+                    // In double from the rest position: no round-off accumulates over steps.
+                    x[i] = (x0[i].cast<double>() + d).cast<Real>();
+                    vb[i] = v;
+                    b.first = b.first.cwiseMin(x[i].cast<double>());
+                    b.second = b.second.cwiseMax(x[i].cast<double>());
+                }
+                return b;
+            },
+            [](const Box& a, const Box& b) { return Box{a.first.cwiseMin(b.first), a.second.cwiseMax(b.second)}; });
+        body.bounds = Aabb{box.first, box.second};
+        body.speed = speed_bound(motion, t);
+    }
+    // The grid indexes every boundary particle; rebuilt whole (O(N_b) per step, see header).
+    w.boundary_grid.build(x);
+}
+
+}  // namespace sph

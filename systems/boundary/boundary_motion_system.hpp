@@ -1,0 +1,24 @@
+#pragma once
+/// @file boundary_motion_system.hpp
+/// @brief Kinematic rigid boundaries (Akinci et al. 2012 sec. 3: boundary particles are moved
+/// with their rigid body and carry its velocity). At the start of each step every moving
+/// body's particles are placed at x0 + d(t) with velocity v(t) (engine/motion.hpp, t = the
+/// step's start time), its bounds and speed bound are updated for the wake rule of individual
+/// stepping, and the boundary grid is rebuilt. Boundary particles never integrate.
+///
+/// Cost per step: O(moving-body particles) for the positions, plus the grid rebuild over
+/// *all* boundary particles, O(N_b) work with an O(N_b log N_b) sort of a nearly sorted key
+/// array (UniformGrid::build). Only in the recipe when the scene has a moving boundary.
+#include "engine/system.hpp"
+
+namespace sph {
+
+class BoundaryMotionSystem final : public System {
+public:
+    std::string name() const override { return "boundary_motion"; }
+    Access access() const override;
+    void register_components(World& w) override;
+    void run(World& w) override;
+};
+
+}  // namespace sph

@@ -1,0 +1,183 @@
+#!/usr/bin/env bash
+# Frames and plots of individual time stepping, end to end: a short dam break in `individual`
+# mode writes frames whose dt/active arrays agree with stats.csv and summary.json; render_dt.py
+# and plot_dt.py draw them with the stated size and colours; bad input exits 2 naming the file.
+# Each check prints what it expected when it fails.
+set -uo pipefail
+run=$1; src=$2
+tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
+fail=0
+check() { if ! eval "$2"; then echo "FAIL: $1"; fail=1; else echo "ok: $1"; fi; }
+
+# A python with numpy and matplotlib (tools/install_deps.sh installs Debian's; a pyenv or
+# virtualenv python3 first on PATH may lack them).
+py=""
+for c in python3 /usr/bin/python3; do
+  if "$c" -c "import numpy, matplotlib" 2>/dev/null; then py=$c; break; fi
+done
+if [ -z "$py" ]; then echo "FAIL: no python3 with numpy and matplotlib (run: bash tools/install_deps.sh)"; exit 1; fi
+export PYTHONPATH="$src/tools" MPLBACKEND=Agg MPLCONFIGDIR="$tmp/mpl" PYTHONDONTWRITEBYTECODE=1
+
+# 1. Runs: 0.1 s of dam_break in individual mode (frames at 0, 1/30, 2/30, 0.1 s) and a
+#    0.01 s global run (frame at t = 0 only).
+"$run" "$src/scenes/dam_break.json" --mode individual --end 0.1 --threads 2 --out "$tmp/ind" -q; rc=$?
+check "individual run exits 0 (got $rc)" '[ $rc -eq 0 ]'
+"$run" "$src/scenes/dam_break.json" --mode global --end 0.01 --threads 2 --out "$tmp/glob" -q; rc=$?
+check "global run exits 0 (got $rc)" '[ $rc -eq 0 ]'
+
+# 2. Frame contents against stats.csv and summary.json.
+"$py" - "$tmp" <<'EOF'; rc=$?
+import csv, json, pathlib, sys
+import numpy as np
+from sph_vtu import read_vtu
+tmp = pathlib.Path(sys.argv[1])
+rows = list(csv.DictReader(open(tmp / "ind/stats.csv")))
+summary = json.load(open(tmp / "ind/summary.json"))
+files = sorted((tmp / "ind/frames").glob("*.vtu"))
+bad = []
+def expect(cond, what):
+    if not cond: bad.append(what)
+expect(len(files) == 4, f"4 frames (t = 0, 1/30, 2/30, 0.1 s), found {len(files)}")
+for f in files:
+    fr = read_vtu(f)
+    expect(fr.types.get("dt") == "Float64" and fr.types.get("active") == "UInt8",
+           f"{f.name}: dt Float64 and active UInt8, found {fr.types}")
+    if "dt" not in fr.point_data or "active" not in fr.point_data:
+        continue
+    dt, act = fr.point_data["dt"], fr.point_data["active"]
+    expect(fr.n == summary["fluid_particles"] == 8000, f"{f.name}: 8000 points, found {fr.n}")
+    expect(set(np.unique(act).tolist()) <= {0, 1}, f"{f.name}: active is 0 or 1")
+    if fr.time == 0:
+        expect(not dt.any() and not act.any(), f"{f.name}: at t = 0 no step taken yet: dt = 0, active = 0")
+        continue
+    # The frame is written after the step that ends on its time: that stats row.
+    match = [r for r in rows if abs(float(r["t"]) + float(r["dt"]) - fr.time) < 1e-9]
+    expect(len(match) == 1, f"{f.name}: one stats row ending at t = {fr.time!r}, found {len(match)}")
+    if len(match) != 1:
+        continue
+    r = match[0]
+    expect(int(act.sum()) == int(r["active"]), f"{f.name}: active count {int(act.sum())} == stats active {r['active']} (step {r['step']})")
+    expect(abs(act.mean() - float(r["active_fraction"])) < 1e-8, f"{f.name}: active fraction {act.mean()} == {r['active_fraction']}")
+    # Delta t_sim = min_i Delta t_i (He Alg. 2 line 17), quantised down to 1 ps ticks, CSV at 9 digits;
+    # the last step is clipped to the end time, so only bounded by the minimum.
+    row_dt = float(r["dt"])
+    if r is not rows[-1]:
+        expect(abs(dt.min() - row_dt) <= 2e-12 + 1e-9 * dt.min(), f"{f.name}: min dt_i {dt.min()!r} == stats dt {row_dt!r}")
+    else:
+        expect(row_dt <= dt.min() * (1 + 1e-9), f"{f.name}: clipped last step {row_dt!r} <= min dt_i {dt.min()!r}")
+    expect(summary["min_dt_s"] * (1 - 1e-12) <= dt.min() <= summary["max_dt_s"] * (1 + 1e-12),
+           f"{f.name}: min dt_i {dt.min()!r} within summary [{summary['min_dt_s']!r}, {summary['max_dt_s']!r}]")
+    expect(dt.min() > 0 and dt.max() <= 5e-3 and dt.max() > 1.5 * dt.min(),
+           f"{f.name}: 0 < dt_i <= dt_max 5 ms and spread (found {dt.min()!r} .. {dt.max()!r})")
+g = read_vtu(tmp / "glob/frames/frame_00000.vtu")
+expect("dt" not in g.point_data and "active" not in g.point_data, f"global frame has no dt/active, found {list(g.point_data)}")
+for b in bad: print("  expected:", b)
+sys.exit(1 if bad else 0)
+EOF
+check "frames carry dt (Float64) and active (UInt8) equal to stats.csv/summary.json" '[ $rc -eq 0 ]'
+
+# 3. render_dt.py: sizes and colours.
+"$py" "$src/tools/render_dt.py" "$tmp/ind" --out "$tmp/png" --width 640 >"$tmp/render.out" 2>&1; rc=$?
+check "render_dt.py exits 0 (got $rc: $(tail -1 "$tmp/render.out"))" '[ $rc -eq 0 ]'
+check "render_dt.py wrote 4 PNGs" '[ "$(ls "$tmp/png"/*.png 2>/dev/null | wc -l)" -eq 4 ]'
+"$py" - "$tmp" <<'EOF'; rc=$?
+import pathlib, re, sys
+import numpy as np
+import matplotlib.image as mpimg
+import render_dt
+from sph_vtu import read_vtu
+tmp = pathlib.Path(sys.argv[1])
+bad = []
+def expect(cond, what):
+    if not cond: bad.append(what)
+m = re.search(r"images (\d+) x (\d+) px", (tmp / "render.out").read_text())
+W, H = int(m.group(1)), int(m.group(2))
+expect(W == 640, f"stated width 640, printed {W}")
+frames = [read_vtu(f) for f in sorted((tmp / "ind/frames").glob("*.vtu"))]
+lo, hi = render_dt.view_bounds(frames, 0, 1)
+layout = render_dt.Layout(lo, hi, 640)
+expect(layout.height == H, f"layout height {layout.height} == printed {H}")
+pos = np.concatenate([f.point_data["dt"][f.point_data["dt"] > 0] for f in frames])
+lo_dt, hi_dt = pos.min(), pos.max()
+# The colour map itself: smallest -> (1, 0, 0), largest -> (1, 1, 1), monotonic in between (log).
+grid = np.geomspace(lo_dt, hi_dt, 50)
+c = render_dt.dt_colours(grid, lo_dt, hi_dt)
+expect(np.allclose(c[0], (1, 0, 0), atol=1e-6) and np.allclose(c[-1], (1, 1, 1), atol=1e-6), f"ends red/white, got {c[0]}, {c[-1]}")
+expect(np.all(np.diff(c[:, 1]) > 0) and np.allclose(c[:, 1], c[:, 2]) and np.allclose(c[:, 0], 1), "G = B rising, R = 1")
+mid = render_dt.dt_colours([np.sqrt(lo_dt * hi_dt)], lo_dt, hi_dt)[0]
+expect(np.allclose(mid, (1, 0.5, 0.5), atol=0.01), f"geometric mean is half way (log scale), got {mid}")
+for f in frames:
+    img = mpimg.imread(tmp / "png" / (f.path.stem + ".png"))
+    expect(img.shape[:2] == (H, W), f"{f.path.stem}.png is {W} x {H}, found {img.shape[1]} x {img.shape[0]}")
+    rgb = img[..., :3]
+    dt = f.point_data["dt"]
+    if not (dt > 0).any():
+        col, row = layout.to_pixel(f.points[0, 0], f.points[0, 1])
+        expect(np.allclose(rgb[int(row), int(col)], 0.5, atol=0.03), f"{f.path.stem}: no dt yet -> grey, got {rgb[int(row), int(col)]}")
+        continue
+    # The particle with the smallest step is drawn on top, in the map's colour for its step.
+    i = int(np.argmin(dt))
+    col, row = layout.to_pixel(f.points[i, 0], f.points[i, 1])
+    want = render_dt.dt_colours([dt[i]], lo_dt, hi_dt)[0]
+    got = rgb[int(row), int(col)]
+    expect(np.allclose(got, want, atol=0.03) and got[0] > 0.95 and got[1] < 0.6, f"{f.path.stem}: pixel at the smallest dt "
+           f"particle {got} == {want} (red-ish)")
+    if dt[i] == lo_dt:
+        expect(np.allclose(got, (1, 0, 0), atol=0.03), f"{f.path.stem}: global smallest dt is pure red, got {got}")
+    # Near-white particles exist in the dark plot area (largest steps are white).
+    x0, y0 = layout.left, layout.top
+    plot = rgb[y0 + 2:y0 + layout.plot_h - 2, x0 + 2:x0 + layout.plot_w - 2]
+    expect(np.count_nonzero(np.all(plot > 0.93, axis=-1)) > 20, f"{f.path.stem}: white-ish (large dt) particles drawn")
+    # Colour bar: red at the bottom, white at the top, G rising upwards.
+    cx, cy, cw, ch = layout.cbar
+    bar = rgb[cy + 2:cy + ch - 2, cx + cw // 2]
+    expect(np.allclose(bar[-1], (1, 0, 0), atol=0.05) and np.allclose(bar[0], (1, 1, 1), atol=0.05),
+           f"{f.path.stem}: colour bar red at bottom {bar[-1]}, white at top {bar[0]}")
+    expect(np.all(np.diff(bar[::-1, 1]) >= -0.01), f"{f.path.stem}: colour bar G rises upwards")
+for b in bad: print("  expected:", b)
+sys.exit(1 if bad else 0)
+EOF
+check "PNG sizes; colour map red (smallest) .. white (largest), log; pixels at particles and colour bar" '[ $rc -eq 0 ]'
+
+# 4. plot_dt.py: size, not blank, both runs drawn.
+"$py" "$src/tools/plot_dt.py" "$tmp/glob" "$tmp/ind" --label global --label individual --out "$tmp/plot.png" \
+  --width 700 --height 500 >"$tmp/plot.out" 2>&1; rc=$?
+check "plot_dt.py exits 0 (got $rc: $(tail -1 "$tmp/plot.out"))" '[ $rc -eq 0 ]'
+"$py" - "$tmp/plot.png" <<'EOF'; rc=$?
+import sys
+import numpy as np
+import matplotlib.image as mpimg
+img = mpimg.imread(sys.argv[1])[..., :3]
+bad = []
+if img.shape[:2] != (500, 700): bad.append(f"700 x 500 px, found {img.shape[1]} x {img.shape[0]}")
+ink = np.count_nonzero(np.any(img < 0.9, axis=-1)) / (img.shape[0] * img.shape[1])
+if ink < 0.02: bad.append(f"at least 2 % non-white pixels, found {100 * ink:.2f} %")
+for name, hexc in (("global (C0)", "1f77b4"), ("individual (C1)", "ff7f0e")):
+    want = np.array([int(hexc[k:k + 2], 16) / 255 for k in (0, 2, 4)])
+    n = np.count_nonzero(np.all(np.abs(img - want) < 0.06, axis=-1))
+    if n < 100: bad.append(f"{name} line drawn (>= 100 pixels of #{hexc}), found {n}")
+for b in bad: print("  expected:", b)
+sys.exit(1 if bad else 0)
+EOF
+check "plot_dt.png is 700 x 500, not blank, both runs' colours present" '[ $rc -eq 0 ]'
+check "plot_dt.py names the clipped last step" 'grep -q "clipped to the end time" "$tmp/plot.out"'
+
+# 5. Bad input: exit 2, the message names the file and what was expected.
+"$py" "$src/tools/render_dt.py" "$tmp/glob/frames/frame_00000.vtu" --out "$tmp/png2" 2>"$tmp/err1"; rc=$?
+check "frame without dt exits 2 (got $rc)" '[ $rc -eq 2 ]'
+check "message names the frame, the missing dt and individual mode" \
+  'grep -q "frame_00000.vtu: no point attribute \"dt\".*individual" "$tmp/err1"'
+"$py" "$src/tools/render_dt.py" "$tmp/nope.vtu" 2>"$tmp/err2"; rc=$?
+check "missing frame exits 2 naming it (got $rc)" '[ $rc -eq 2 ] && grep -q "nope.vtu: no such file" "$tmp/err2"'
+head -c 300000 "$tmp/ind/frames/frame_00001.vtu" >"$tmp/cut.vtu"
+"$py" "$src/tools/render_dt.py" "$tmp/cut.vtu" 2>"$tmp/err3"; rc=$?
+check "truncated frame exits 2 (got $rc)" '[ $rc -eq 2 ] && grep -q "cut.vtu: .*truncated" "$tmp/err3"'
+"$py" "$src/tools/plot_dt.py" "$tmp/missing_run" 2>"$tmp/err4"; rc=$?
+check "missing stats.csv exits 2 naming it (got $rc)" '[ $rc -eq 2 ] && grep -q "missing_run: no such file or directory" "$tmp/err4"'
+printf 'step,t,dt\n0,0,0.001\n' >"$tmp/old.csv"
+"$py" "$src/tools/plot_dt.py" "$tmp/old.csv" 2>"$tmp/err5"; rc=$?
+check "stats.csv without active_fraction exits 2 naming the column (got $rc)" \
+  '[ $rc -eq 2 ] && grep -q "old.csv: missing column(s) active_fraction" "$tmp/err5"'
+
+[ $fail -eq 0 ] && echo "tools plots: all checks passed"
+exit $fail
