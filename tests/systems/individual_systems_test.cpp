@@ -253,7 +253,9 @@ void check_fraction(double fraction) {
         EXPECT_NEAR((x[i].cast<double>() - xn).norm(), 0.0, 1e-6 * (1 + xn.norm())) << "particle " << i;
         const double rn = rho_last[i] + delta * drho[i];
         EXPECT_NEAR(rho[i], rn, 1e-6 * rn) << "particle " << i;
-        if (want[i]) EXPECT_EQ(x0[i], x_prev[i]) << "base state of active particle " << i;
+        if (want[i]) {
+            EXPECT_EQ(x0[i], x_prev[i]) << "base state of active particle " << i;
+        }
     }
 }
 
