@@ -1,0 +1,91 @@
+// BM_Individual/<system>/<particles>/<active per mille>: each individual-stepping system
+// (He et al. Alg. 2) on a jittered lattice with a given share of scattered active particles.
+// The pipeline runs once in recipe order outside the timed loop; the loop repeats one system.
+#include <benchmark/benchmark.h>
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "bench_util.hpp"
+#include "systems/active/select_active_system.hpp"
+#include "systems/density/density_system.hpp"
+#include "systems/forces/forces_system.hpp"
+#include "systems/integrate/async_integration_system.hpp"
+#include "systems/neighbours/neighbour_search_system.hpp"
+#include "systems/timestep/dt_propagation_system.hpp"
+
+using namespace sph;
+
+namespace {
+
+struct Pipeline {
+    std::unique_ptr<World> w;
+    std::vector<std::unique_ptr<System>> systems;
+
+    Pipeline(std::size_t n, double active_share) : w(bench::lattice_world(n)) {
+        systems.push_back(std::make_unique<SelectActiveSystem>());
+        systems.push_back(std::make_unique<FluidGridSystem>());
+        systems.push_back(std::make_unique<FluidNeighbourSystem>(true));
+        systems.push_back(std::make_unique<HaloSystem>(false));
+        systems.push_back(std::make_unique<DensitySystem>(false, true));
+        systems.push_back(std::make_unique<ForcesSystem>(false, true));
+        systems.push_back(std::make_unique<DtPropagationSystem>());
+        systems.push_back(std::make_unique<IndividualGlobalDtSystem>());
+        systems.push_back(std::make_unique<AsyncIntegrationSystem>());
+        for (auto& s : systems) s->register_components(*w);
+        // Every particle starts with fresh lists; then a scattered share is due at t = 1 ms.
+        FluidGridSystem().run(*w);
+        FluidNeighbourSystem().run(*w);
+        const Tick now = to_ticks(1e-3);
+        auto t_last = w->fluid.store.get(comp::t_last);
+        auto dt = w->fluid.store.get(comp::dt);
+        for (std::size_t i = 0; i < t_last.size(); ++i) {
+            const bool due = double((i * 2654435761u) % 1000u) < 1000.0 * active_share;
+            t_last[i] = due ? 0 : now;
+            dt[i] = 1e-4;
+        }
+        w->step.t_ticks = now;
+        w->step.t = to_seconds(now);
+        for (auto& s : systems) s->run(*w);
+    }
+    System& get(const std::string& name) {
+        for (auto& s : systems)
+            if (s->name() == name) return *s;
+        throw std::runtime_error("no system " + name);
+    }
+};
+
+void run_system(benchmark::State& state, const std::string& name) {
+    Pipeline p(std::size_t(state.range(0)), double(state.range(1)) / 1000.0);
+    System& s = p.get(name);
+    for (auto _ : state) {
+        s.run(*p.w);
+        benchmark::ClobberMemory();
+    }
+    const double n = double(p.w->fluid.size());
+    state.SetItemsProcessed(state.iterations() * std::int64_t(n));
+    state.counters["particles"] = n;
+    state.counters["active_fraction"] = double(p.w->active_set.size()) / n;
+}
+
+void args(benchmark::internal::Benchmark* b) {
+    for (int n : {10'000, 100'000, 1'000'000})
+        for (int per_mille : {1000, 500, 100, 10}) b->Args({n, per_mille});
+    b->Unit(benchmark::kMillisecond)->UseRealTime();
+}
+
+}  // namespace
+
+#define SPH_INDIVIDUAL_BENCH(system)                                                          \
+    static void BM_Individual_##system(benchmark::State& state) { run_system(state, #system); } \
+    BENCHMARK(BM_Individual_##system)->Apply(args)
+
+SPH_INDIVIDUAL_BENCH(select_active);
+SPH_INDIVIDUAL_BENCH(fluid_neighbours);
+SPH_INDIVIDUAL_BENCH(halo);
+SPH_INDIVIDUAL_BENCH(density);
+SPH_INDIVIDUAL_BENCH(forces);
+SPH_INDIVIDUAL_BENCH(dt_propagation);
+SPH_INDIVIDUAL_BENCH(global_dt);
+SPH_INDIVIDUAL_BENCH(async_integrate);
