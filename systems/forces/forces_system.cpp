@@ -75,7 +75,9 @@ void ForcesSystem::run(World& w) {
         dt_raw = w.fluid.store.get(comp::dt_raw);
     }
     const SteppingParams& stepping = w.scene.simulation.stepping;
-    auto evaluate = [&](Index i) {
+    // The mode is a template parameter so the `global`/`constant` loop carries no per-neighbour
+    // branches for the individual-only sums.
+    auto evaluate = [&]<bool Individual>(Index i) {
         const Vec3 xi = x[i], vi = v[i];
         const Real rhoi = rho[i];
         const Real pi = p[i] / (rhoi * rhoi);
@@ -88,7 +90,7 @@ void ForcesSystem::run(World& w) {
             const Vec3 vij = vi - v[j];
             const Real visc = alpha > 0 ? monaghan_pi(vij.dot(xij), r2, alpha, c, h, rhoi, rho[j]) : Real(0);
             a -= (m * (pi + p[j] / (rho[j] * rho[j]) + visc)) * grad;
-            if (m_individual) div += m * vij.dot(grad);
+            if constexpr (Individual) div += m * vij.dot(grad);
         }
         if (has_boundary) {
             for (Index b : w.boundary_neighbours.of(i)) {
@@ -98,11 +100,11 @@ void ForcesSystem::run(World& w) {
                 const Vec3 vib = moving ? Vec3(vi - vel_b[b]) : vi;  // relative velocity v_i - v_b
                 const Real visc = alpha > 0 ? monaghan_pi(vib.dot(xib), r2, alpha, c, h, rhoi, rho0) : Real(0);
                 a -= (rho0 * vb[b] * (Real(2) * pi + visc)) * grad;
-                if (m_individual) div += rho0 * vb[b] * vib.dot(grad);  // He eq. 5, boundary term
+                if constexpr (Individual) div += rho0 * vb[b] * vib.dot(grad);  // He eq. 5, boundary term
             }
         }
         acc[i] = a + g;
-        if (m_individual) {
+        if constexpr (Individual) {
             drho[i] = div;
             // He Alg. 2 line 13, computed exactly as the global step of eq. 6-8.
             dt_raw[i] = global_time_step(stepping, h, c, std::sqrt(double(vi.squaredNorm())),
@@ -111,7 +113,7 @@ void ForcesSystem::run(World& w) {
     };
     if (!m_individual) {
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 256), [&](const auto& r) {
-            for (std::size_t i = r.begin(); i < r.end(); ++i) evaluate(Index(i));
+            for (std::size_t i = r.begin(); i < r.end(); ++i) evaluate.template operator()<false>(Index(i));
         });
         w.step.force_evaluations = x.size();
         return;
@@ -124,7 +126,7 @@ void ForcesSystem::run(World& w) {
         tbb::blocked_range<std::size_t>(0, active.size(), 128), std::uint64_t(0),
         [&](const auto& r, std::uint64_t done) {
             for (std::size_t k = r.begin(); k < r.end(); ++k) {
-                evaluate(active[k]);
+                evaluate.template operator()<true>(active[k]);
                 t_last[active[k]] = now;
                 ++done;
             }
