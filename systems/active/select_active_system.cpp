@@ -73,6 +73,14 @@ void HaloSystem::run(World& w) {
     // A per-particle claim flag keeps each halo particle once; flags are cleared afterwards
     // by walking the halo itself, so the cost stays proportional to the active set.
     m_claim.resize(active.size());
+    if (set.size() == active.size()) {  // everyone active: no halo (global-equivalent steps)
+        w.halo_set.clear();
+        std::uint64_t b = 0;
+        if (m_with_boundary)
+            for (auto c : w.boundary_neighbours.count) b += c;
+        w.step.boundary_contributions = b;
+        return;
+    }
     tbb::enumerable_thread_specific<std::vector<Index>> local;
     tbb::enumerable_thread_specific<std::uint64_t> boundary_entries(0);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, set.size(), 256), [&](const auto& r) {
@@ -82,7 +90,10 @@ void HaloSystem::run(World& w) {
             const Index i = set[k];
             for (Index j : w.fluid_neighbours.of(i)) {
                 if (active[j]) continue;
+                // A plain load first: most halo particles neighbour several active ones, and
+                // the locked exchange (the cost of this system) is only paid on a first claim.
                 std::atomic_ref<std::uint8_t> claim(m_claim[j]);
+                if (claim.load(std::memory_order_relaxed) != 0) continue;
                 if (claim.exchange(1, std::memory_order_relaxed) == 0) out.push_back(j);
             }
             if (m_with_boundary) bcount += w.boundary_neighbours.count[i];
@@ -90,7 +101,8 @@ void HaloSystem::run(World& w) {
     });
     w.halo_set.clear();
     for (auto& v : local) w.halo_set.insert(w.halo_set.end(), v.begin(), v.end());
-    std::sort(w.halo_set.begin(), w.halo_set.end());  // deterministic order
+    // No sort: the order varies with the thread schedule, but nothing depends on it (the
+    // propagation writes each halo particle's own minimum, then takes atomic minima).
     for (Index j : w.halo_set) m_claim[j] = 0;
     std::uint64_t b = 0;
     for (auto c : boundary_entries) b += c;
