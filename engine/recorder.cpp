@@ -1,5 +1,7 @@
 #include "engine/recorder.hpp"
 
+#include <sys/resource.h>
+
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -10,6 +12,17 @@
 #include "engine/io.hpp"
 
 namespace sph {
+
+double front_x(const World& w) {
+    // The largest x of a fluid particle with at least 4 fluid neighbours (so a lone droplet
+    // thrown ahead is not the front), in metres; 0 without such a particle.
+    const auto x = w.fluid.store.get(comp::position);
+    double front = -std::numeric_limits<double>::infinity();
+    for (std::size_t i = 0; i < x.size(); ++i)
+        if (i < w.fluid_neighbours.count.size() && w.fluid_neighbours.count[i] >= 4)
+            front = std::max(front, double(x[i].x()));
+    return std::isfinite(front) ? front : 0.0;
+}
 
 Recorder::Recorder(std::filesystem::path dir, const Simulation& sim) : m_dir(std::move(dir)) {
     std::filesystem::create_directories(m_dir);
@@ -59,6 +72,9 @@ void Recorder::after_step(const Simulation& sim) {
     m_dt_max = std::max(m_dt_max, dt_taken);
     m_rho_err_max = std::max(m_rho_err_max, s.rho_err_max);
     ++m_steps;
+    const double end = w.scene.simulation.end_time;
+    while (m_fronts.size() < 3 && s.t >= 0.25 * double(m_fronts.size() + 1) * end - 1e-9)
+        m_fronts.emplace_back(s.t, front_x(w));
     const double rate = w.scene.simulation.frame_rate;
     if (rate > 0 && s.t >= m_next_frame_time - 1e-9) write_frame(sim);
 }
@@ -78,6 +94,14 @@ nlohmann::json Recorder::finish(const Simulation& sim, double wall_seconds, int 
     j["simulated_time_s"] = sim.time();
     j["steps"] = sim.steps();
     j["wall_time_s"] = wall_seconds;
+    // Process CPU time (user + system): on a shared machine it varies far less than the wall
+    // time when other processes compete for the cores.
+    {
+        rusage u{};
+        getrusage(RUSAGE_SELF, &u);
+        j["cpu_time_s"] = double(u.ru_utime.tv_sec) + 1e-6 * double(u.ru_utime.tv_usec) +
+                          double(u.ru_stime.tv_sec) + 1e-6 * double(u.ru_stime.tv_usec);
+    }
     j["threads"] = threads;
     const double fps = wall_seconds > 0 ? double(w.fluid.size()) * double(sim.steps()) / wall_seconds : 0.0;
     j["fluid_particle_steps_per_s"] = fps;
@@ -98,16 +122,12 @@ nlohmann::json Recorder::finish(const Simulation& sim, double wall_seconds, int 
                     {"fluid_height", w.physics.fluid_height}};
     j["frames"] = m_frame;
     j["boundary_collisions_total"] = m_collisions;
-    // Front at the end: the largest x of a fluid particle with at least 4 fluid neighbours
-    // (so a lone droplet thrown ahead is not the front), in metres.
-    {
-        const auto x = w.fluid.store.get(comp::position);
-        double front = -std::numeric_limits<double>::infinity();
-        for (std::size_t i = 0; i < x.size(); ++i)
-            if (i < w.fluid_neighbours.count.size() && w.fluid_neighbours.count[i] >= 4)
-                front = std::max(front, double(x[i].x()));
-        j["front_x_m"] = std::isfinite(front) ? front : 0.0;
-    }
+    j["front_x_m"] = front_x(w);
+    // The front at a quarter, half and three quarters of the end time (the first step ending
+    // at or after each), to compare modes while the surge is still running.
+    nlohmann::json fronts = nlohmann::json::array();
+    for (const auto& [t, x] : m_fronts) fronts.push_back({{"t", t}, {"x", x}});
+    j["front_x_m_at"] = fronts;
     double total = 0;
     for (std::size_t i = 0; i < g.systems().size(); ++i) total += g.total_seconds(i);
     nlohmann::json systems = nlohmann::json::array();

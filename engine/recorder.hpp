@@ -6,12 +6,17 @@
 #include <chrono>
 #include <filesystem>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
 #include "engine/simulation.hpp"
 
 namespace sph {
+
+/// @brief The front: the largest x of a fluid particle with at least 4 fluid neighbours.
+double front_x(const World& w);
 
 class Recorder {
 public:
@@ -38,6 +43,7 @@ private:
     double m_dt_min = 0, m_dt_max = 0, m_rho_err_max = 0;
     std::uint64_t m_steps = 0;
     double m_next_frame_time = 0;
+    std::vector<std::pair<double, double>> m_fronts;  ///< (t, front x) at 1/4, 1/2, 3/4 of the end
     std::chrono::steady_clock::time_point m_t0;
 };
 
