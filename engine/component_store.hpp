@@ -33,6 +33,10 @@ public:
     virtual void permute(std::span<const Index> perm) = 0;
     virtual std::size_t bytes() const = 0;
     virtual const std::type_info& type() const = 0;
+    /// @brief An empty column of the same type (for snapshots).
+    virtual std::unique_ptr<ColumnBase> empty_clone() const = 0;
+    /// @brief Copies the values of a column of the same type (reusing this column's storage).
+    virtual void assign(const ColumnBase& other) = 0;
 };
 
 /// @brief The value new column entries get: zero (Eigen's default constructor leaves
@@ -57,6 +61,11 @@ public:
     }
     std::size_t bytes() const override { return data.capacity() * sizeof(T); }
     const std::type_info& type() const override { return typeid(T); }
+    std::unique_ptr<ColumnBase> empty_clone() const override { return std::make_unique<Column<T>>(); }
+    void assign(const ColumnBase& other) override {
+        const auto& src = static_cast<const Column<T>&>(other).data;
+        data.assign(src.begin(), src.end());
+    }
 
 private:
     std::vector<T> m_scratch;
@@ -102,6 +111,17 @@ public:
         for (const auto& [name, col] : m_columns) b += col->bytes();
         return b;
     }
+    /// @brief A copy of every column, by name (a state snapshot, e.g. for a rollback).
+    struct Snapshot {
+        std::map<std::string, std::unique_ptr<ColumnBase>, std::less<>> columns;
+        std::size_t size = 0;
+    };
+    /// @brief Copies every column into `out`, column by column (reusing its storage).
+    void save(Snapshot& out) const;
+    /// @brief Restores every column saved in `in` and the size. Columns registered after the
+    /// snapshot was taken are resized to its size.
+    void restore(const Snapshot& in);
+
     std::vector<std::string> names() const {
         std::vector<std::string> out;
         for (const auto& [name, col] : m_columns) out.push_back(name);

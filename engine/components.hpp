@@ -29,6 +29,16 @@ inline constexpr Component<Vec3> position_last{"position_last"};
 inline constexpr Component<Vec3> velocity_last{"velocity_last"};
 inline constexpr Component<Real> density_last{"density_last"};
 
+// PCISPH (Solenthaler & Pajarola 2009; Ihmsen et al. 2010 Alg. 2).
+inline constexpr Component<Vec3> predicted_position{"predicted_position"};  ///< x*(t + dt)
+inline constexpr Component<Vec3> pressure_acceleration{"pressure_acceleration"};  ///< F^p / m, eq. 6
+/// Viscosity and surface tension per unit mass (only when the scene asks for them).
+inline constexpr Component<Vec3> nonpressure_acceleration{"nonpressure_acceleration"};
+/// Boundary: m_b = rho0 V_b (eq. 13 with Akinci's volume) and the constant boundary part of
+/// its own density, sum_b' m_b' W_bb'.
+inline constexpr Component<Real> mass{"mass"};
+inline constexpr Component<Real> self_density{"self_density"};
+
 // Boundary particles (Akinci et al. 2012).
 inline constexpr Component<Real> volume{"volume"};  ///< V_b = 1 / sum_k W_bk (Akinci eq. 4)
 inline constexpr Component<Vec3> normal{"normal"};

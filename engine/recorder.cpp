@@ -29,7 +29,7 @@ Recorder::Recorder(std::filesystem::path dir, const Simulation& sim) : m_dir(std
     std::ostringstream h;
     h << "step,t,dt,updated,neighbours_per_particle,rho_err_avg,rho_err_max,v_max,a_max,collisions,"
          "active,active_fraction,neighbour_searches,force_evaluations,boundary_contributions,"
-         "propagation_updates,wall_s";
+         "propagation_updates,iterations,boundary_active,rolled_back,wall_s";
     for (const auto& s : sim.graph().systems()) h << ",ms_" << s->name();
     h << '\n';
     m_csv = h.str();
@@ -54,18 +54,23 @@ void Recorder::after_step(const Simulation& sim) {
     const StepState& s = w.step;
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - m_t0).count();
     std::ostringstream row;
-    row << std::setprecision(9) << (s.step - 1) << ',' << s.t - s.dt << ',' << s.dt << ',' << s.updated << ','
+    row << std::setprecision(9) << s.last_step << ',' << s.last_t << ',' << s.last_dt << ',' << s.updated << ','
         << (s.updated ? double(s.neighbour_pairs) / double(s.updated) : 0.0) << ',' << s.rho_err_avg << ','
         << s.rho_err_max << ',' << s.v_max << ',' << s.a_max << ',' << s.collisions << ',' << s.active << ','
         << (w.fluid.size() ? double(s.active) / double(w.fluid.size()) : 0.0) << ',' << s.neighbour_searches << ','
-        << s.force_evaluations << ',' << s.boundary_contributions << ',' << s.propagation_updates << ',' << wall;
+        << s.force_evaluations << ',' << s.boundary_contributions << ',' << s.propagation_updates << ','
+        << s.iterations << ',' << s.boundary_active << ',' << int(s.rolled_back) << ',' << wall;
     const auto& g = sim.graph();
     row << std::setprecision(4);
     for (std::size_t i = 0; i < g.systems().size(); ++i) row << ',' << g.last_seconds(i) * 1e3;
     row << '\n';
     m_csv += row.str();
     m_collisions += s.collisions;
+    if (s.rolled_back) return;  // a discarded step (shock rollback) counts in no statistic
     if (w.fluid.size()) m_active_fraction_sum += double(s.active) / double(w.fluid.size());
+    if (w.fluid.size()) m_boundary_ratio_sum += double(s.boundary_active) / double(w.fluid.size());
+    m_iterations_sum += s.iterations;
+    m_rho_err_avg_max = std::max(m_rho_err_avg_max, s.rho_err_avg);
     // The step the conditions allowed (a last step clipped to the end time is not a minimum).
     const double dt_taken = s.dt_stable > 0 ? s.dt_stable : s.dt;
     m_dt_min = m_steps ? std::min(m_dt_min, dt_taken) : dt_taken;
@@ -110,6 +115,25 @@ nlohmann::json Recorder::finish(const Simulation& sim, double wall_seconds, int 
     j["max_dt_s"] = m_dt_max;
     j["avg_active_fraction"] = m_steps ? m_active_fraction_sum / double(m_steps) : 0.0;
     j["max_density_error"] = m_rho_err_max;
+    j["max_avg_density_error"] = m_rho_err_avg_max;
+    j["shocks"] = w.step.shocks;
+    j["kept_steps"] = m_steps;
+    if (w.scene.simulation.method == Method::Pcisph) {
+        const auto& pc = w.pcisph;
+        const double h = w.physics.h;
+        // Ihmsen 2010 eq. 14-15 with lambda_v = 0.4 and lambda_f = 0.25 (Monaghan 1992) and the
+        // maxima tracked over the run: the fixed step a constant-step run would need.
+        double dt_const = std::numeric_limits<double>::infinity();
+        if (pc.v_max_tracked > 0) dt_const = std::min(dt_const, 0.4 * h / pc.v_max_tracked);
+        if (pc.a_max_tracked > 0) dt_const = std::min(dt_const, 0.25 * std::sqrt(h / pc.a_max_tracked));
+        j["pcisph"] = {{"avg_iterations", m_steps ? double(m_iterations_sum) / double(m_steps) : 0.0},
+                       {"avg_active_boundary_per_fluid", m_steps ? m_boundary_ratio_sum / double(m_steps) : 0.0},
+                       {"v_max_tracked", pc.v_max_tracked},
+                       {"a_max_tracked", pc.a_max_tracked},
+                       {"dt_eq14_15", std::isfinite(dt_const) ? dt_const : 0.0},
+                       {"boundary_handling", to_string(w.scene.boundary.handling)},
+                       {"eta", w.scene.pcisph.eta}};
+    }
     j["peak_memory_bytes"] = peak_memory_bytes();
     const std::size_t bytes = sim.particle_bytes();
     j["particle_data_bytes"] = bytes;

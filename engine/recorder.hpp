@@ -41,7 +41,9 @@ private:
     std::uint64_t m_collisions = 0;
     double m_active_fraction_sum = 0;  ///< sum over steps of active / fluid particles
     double m_dt_min = 0, m_dt_max = 0, m_rho_err_max = 0;
-    std::uint64_t m_steps = 0;
+    std::uint64_t m_steps = 0;          ///< kept steps (a rolled-back step is not counted)
+    double m_boundary_ratio_sum = 0, m_rho_err_avg_max = 0;
+    std::uint64_t m_iterations_sum = 0;
     double m_next_frame_time = 0;
     std::vector<std::pair<double, double>> m_fronts;  ///< (t, front x) at 1/4, 1/2, 3/4 of the end
     std::chrono::steady_clock::time_point m_t0;

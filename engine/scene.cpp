@@ -31,6 +31,28 @@ const char* to_string(Method m) {
     switch (m) {
         case Method::Wcsph:
             return "wcsph";
+        case Method::Pcisph:
+            return "pcisph";
+    }
+    return "unknown";
+}
+
+const char* to_string(PcisphLoop l) {
+    switch (l) {
+        case PcisphLoop::Fixed:
+            return "fixed";
+        case PcisphLoop::UntilConverged:
+            return "until_converged";
+    }
+    return "unknown";
+}
+
+const char* to_string(BoundaryHandling b) {
+    switch (b) {
+        case BoundaryHandling::Ihmsen:
+            return "ihmsen";
+        case BoundaryHandling::DirectForcing:
+            return "direct_forcing";
     }
     return "unknown";
 }
@@ -43,6 +65,8 @@ const char* to_string(SteppingMode m) {
             return "global";
         case SteppingMode::Individual:
             return "individual";
+        case SteppingMode::Adaptive:
+            return "adaptive";
     }
     return "unknown";
 }
@@ -84,14 +108,19 @@ namespace {
 
 // ---- Vocabulary: keys per section (in the order they are listed in messages) and names. ----
 
-constexpr std::array<const char*, 8> k_top_keys{"name",  "description",  "simulation", "domain",
-                                                "fluid", "fluid_blocks", "boundaries", "output"};
+constexpr std::array<const char*, 10> k_top_keys{"name",  "description",  "simulation", "domain",
+                                                 "fluid", "fluid_blocks", "boundaries", "output",
+                                                 "pcisph", "boundary"};
+constexpr std::array<const char*, 6> k_pcisph_keys{"iterations", "max_iterations", "loop",
+                                                   "eta",        "eta_max",        "delta_shock"};
+constexpr std::array<const char*, 2> k_boundary_params_keys{"handling", "friction"};
 constexpr std::array<const char*, 7> k_simulation_keys{
     "method", "stepping", "end_time", "frame_rate", "scale", "gravity", "sort_interval"};
 constexpr std::array<const char*, 8> k_stepping_keys{"mode",     "dt",       "lambda_v", "lambda_f",
                                                      "acoustic", "lambda_c", "dt_max",   "dt_min"};
-constexpr std::array<const char*, 5> k_fluid_keys{"rest_density", "particle_radius", "viscosity",
-                                                  "speed_of_sound", "density_fluctuation"};
+constexpr std::array<const char*, 6> k_fluid_keys{"rest_density", "particle_radius", "viscosity",
+                                                  "speed_of_sound", "density_fluctuation",
+                                                  "surface_tension"};
 constexpr std::array<const char*, 2> k_box_keys{"min", "max"};
 constexpr std::array<const char*, 4> k_block_keys{"min", "max", "velocity", "hydrostatic"};
 constexpr std::array<const char*, 4> k_boxlike_boundary_keys{"type", "min", "max", "motion"};
@@ -107,9 +136,12 @@ constexpr std::array<const char*, 2> k_output_keys{"format", "attributes"};
 constexpr const char* k_name_expected =
     "a non-empty string without \"/\" (it names the output folder)";
 
-constexpr std::array<Method, 1> k_methods{Method::Wcsph};
-constexpr std::array<SteppingMode, 3> k_modes{SteppingMode::Constant, SteppingMode::Global,
-                                              SteppingMode::Individual};
+constexpr std::array<Method, 2> k_methods{Method::Wcsph, Method::Pcisph};
+constexpr std::array<SteppingMode, 4> k_modes{SteppingMode::Constant, SteppingMode::Global,
+                                              SteppingMode::Individual, SteppingMode::Adaptive};
+constexpr std::array<PcisphLoop, 2> k_loops{PcisphLoop::Fixed, PcisphLoop::UntilConverged};
+constexpr std::array<BoundaryHandling, 2> k_handlings{BoundaryHandling::Ihmsen,
+                                                      BoundaryHandling::DirectForcing};
 constexpr std::array<BoundaryShape, 3> k_shapes{BoundaryShape::Container, BoundaryShape::Box,
                                                 BoundaryShape::Sphere};
 constexpr std::array<MotionType, 4> k_motion_types{MotionType::Linear, MotionType::Sinusoidal,
@@ -670,6 +702,23 @@ class Reader {
             }
         }
         if (const json* v = root.find("output")) read_output(root.at(*v, "output"), s.output);
+        const bool pcisph = s.simulation.method == Method::Pcisph;
+        for (const char* key : {"pcisph", "boundary"}) {
+            if (const json* v = root.find(key); v && !pcisph) {
+                fail_at(child("", key), dump(*v),
+                        std::string("no \"") + key + "\" section: it belongs to method \"pcisph\", "
+                        "and /simulation/method is \"" + to_string(s.simulation.method) + "\"",
+                        {child("", key), "/simulation/method"});
+            }
+        }
+        if (const json* v = root.find("pcisph")) read_pcisph(root.at(*v, "pcisph"), s.pcisph);
+        if (const json* v = root.find("boundary")) read_boundary_params(root.at(*v, "boundary"), s.boundary);
+        if (s.fluid.surface_tension > 0 && !pcisph) {
+            fail_at("/fluid/surface_tension", dump_at("/fluid/surface_tension"),
+                    "0 or no key: surface tension (Becker & Teschner 2007) is implemented for method "
+                    "\"pcisph\" only",
+                    {"/fluid/surface_tension", "/simulation/method"});
+        }
 
         cross_check(s);
         return s;
@@ -790,7 +839,22 @@ class Reader {
         require_object(n, "an object");
         check_keys(n, k_simulation_keys);
         if (const json* v = n.find("method")) p.method = pick_enum(n.at(*v, "method"), k_methods);
+        if (p.method == Method::Pcisph) p.stepping.mode = SteppingMode::Adaptive;  // its default
         if (const json* v = n.find("stepping")) read_stepping(n.at(*v, "stepping"), p.stepping);
+        // Modes belong to methods: global/individual are WCSPH's (He et al.), adaptive is
+        // PCISPH's (Ihmsen et al. 2010); constant is both.
+        const bool ok = p.stepping.mode == SteppingMode::Constant ||
+                        (p.method == Method::Wcsph) != (p.stepping.mode == SteppingMode::Adaptive);
+        if (!ok) {
+            const std::string mode_path = child(child(n.path, "stepping"), "mode");
+            fail_at(mode_path, dump_at(mode_path),
+                    p.method == Method::Pcisph
+                        ? "one of \"constant\", \"adaptive\" for method \"pcisph\" (\"global\" and "
+                          "\"individual\" are WCSPH modes)"
+                        : "one of \"constant\", \"global\", \"individual\" for method \"wcsph\" "
+                          "(\"adaptive\" is the PCISPH mode: set simulation.method to \"pcisph\")",
+                    {mode_path, child(n.path, "method")});
+        }
         read_number(n, "end_time", positive("seconds"), p.end_time);
         read_number(n, "frame_rate", non_negative("frames per simulated second; 0 writes none"),
                     p.frame_rate);
@@ -840,6 +904,56 @@ class Reader {
         }
     }
 
+    void read_pcisph(const Node& n, PcisphParams& p) const {
+        require_object(n, "an object");
+        check_keys(n, k_pcisph_keys);
+        const auto integer = [&](const char* key, int lo, int hi, int& out) {
+            const json* v = n.find(key);
+            if (!v) return;
+            const std::string what = "an integer from " + std::to_string(lo) + " to " + std::to_string(hi);
+            if (!v->is_number_integer()) fail(child(n.path, key), dump(*v), what);
+            const std::int64_t x = v->is_number_unsigned() ? std::int64_t(std::min<std::uint64_t>(
+                                                                  v->get<std::uint64_t>(), INT64_MAX))
+                                                            : v->get<std::int64_t>();
+            if (x < lo || x > hi) fail(child(n.path, key), dump(*v), what);
+            out = int(x);
+        };
+        integer("iterations", 1, 1000, p.iterations);
+        integer("max_iterations", 1, 100000, p.max_iterations);
+        if (const json* v = n.find("loop")) p.loop = pick_enum(n.at(*v, "loop"), k_loops);
+        read_number(n, "eta", {0.0, false, 0.5, false, "fraction of rest density"}, p.eta);
+        if (const json* v = n.find("eta_max")) {
+            const Node e = n.at(*v, "eta_max");
+            const double x = number(e, {0.0, false, 1.0, false, "fraction of rest density"});
+            if (!(x > p.eta)) fail_at(e.path, dump(*v), "a number > eta = " + fmt_num(p.eta), {e.path, child(n.path, "eta")});
+            p.eta_max = x;
+        }
+        const double eta_max = p.eta_max.value_or(10.0 * p.eta);
+        if (const json* v = n.find("delta_shock")) {
+            const Node d = n.at(*v, "delta_shock");
+            const double x = number(d, positive("fraction of rest density"));
+            // Ihmsen 2010 after eq. 27: eta_avg < delta_shock < eta_max.
+            if (!(x > p.eta && x < eta_max))
+                fail_at(d.path, dump(*v),
+                        "a number > eta = " + fmt_num(p.eta) + " and < eta_max = " + fmt_computed(eta_max) +
+                            " (Ihmsen 2010: eta_avg < delta_shock < eta_max)",
+                        {d.path, child(n.path, "eta"), child(n.path, "eta_max")});
+            p.delta_shock = x;
+        }
+        if (p.loop == PcisphLoop::UntilConverged && p.max_iterations < p.iterations) {
+            const std::string mp = child(n.path, "max_iterations");
+            fail_at(mp, dump_at(mp), "an integer >= iterations = " + std::to_string(p.iterations),
+                    {mp, child(n.path, "iterations")});
+        }
+    }
+
+    void read_boundary_params(const Node& n, BoundaryParams& p) const {
+        require_object(n, "an object");
+        check_keys(n, k_boundary_params_keys);
+        if (const json* v = n.find("handling")) p.handling = pick_enum(n.at(*v, "handling"), k_handlings);
+        read_number(n, "friction", {0.0, true, 1.0, true, "epsilon of Ihmsen eq. 12; 1 is free slip"}, p.friction);
+    }
+
     void read_fluid(const Node& n, FluidParams& p) const {
         require_object(n, "an object");
         check_keys(n, k_fluid_keys);
@@ -851,6 +965,8 @@ class Reader {
         }
         read_number(n, "density_fluctuation", {0.0, false, 0.2, true, "fraction of rest density"},
                     p.density_fluctuation);
+        read_number(n, "surface_tension", non_negative("m^3/s^2, Becker & Teschner 2007 kappa"),
+                    p.surface_tension);
     }
 
     Aabb read_box(const Node& n) const {

@@ -24,12 +24,23 @@ struct Aabb {
     }
 };
 
-enum class Method { Wcsph };
-enum class SteppingMode { Constant, Global, Individual };
+enum class Method { Wcsph, Pcisph };
+/// `constant` for both methods; `global` and `individual` are WCSPH modes; `adaptive` is the
+/// PCISPH mode of Ihmsen et al. 2010 (eq. 16-27).
+enum class SteppingMode { Constant, Global, Individual, Adaptive };
+/// PCISPH iteration rule: `fixed` runs exactly `iterations` (Ihmsen 2010: three);
+/// `until_converged` is Solenthaler & Pajarola's loop: while max rho_err > eta or k < iterations,
+/// at most `max_iterations`.
+enum class PcisphLoop { Fixed, UntilConverged };
+/// Ihmsen 2010 sec. 3.2 (boundary density and pressure, eq. 13, plus direct forcing eq. 9-12),
+/// or `direct_forcing` alone (Becker, Teschner, Teschner 2009 eq. 7-8: no boundary density).
+enum class BoundaryHandling { Ihmsen, DirectForcing };
 
 /// @brief Names as written in scene files and on the command line.
 const char* to_string(Method m);
 const char* to_string(SteppingMode m);
+const char* to_string(PcisphLoop l);
+const char* to_string(BoundaryHandling b);
 
 /// @brief Time-step control (He et al. eq. 6-8 for `global`; eq. 9 and Alg. 2 for
 /// `individual`, whose defaults are lambda_v 0.05, lambda_f 0.025 and no acoustic condition).
@@ -42,6 +53,23 @@ struct SteppingParams {
     double lambda_c = 0.4;     ///< Acoustic (sound-speed CFL) coefficient.
     double dt_max = 5e-3;      ///< s; upper bound on any step.
     double dt_min = 1e-7;      ///< s; a step below this stops the run with a diagnosis.
+};
+
+/// @brief PCISPH (Solenthaler & Pajarola 2009; Ihmsen et al. 2010 Alg. 2) and its adaptive step.
+/// Densities are relative: eta = 0.01 is a 1 % density error (the paper's eta_avg%).
+struct PcisphParams {
+    int iterations = 3;          ///< fixed: iterations per step; until_converged: the minimum
+    int max_iterations = 50;     ///< until_converged: upper bound
+    PcisphLoop loop = PcisphLoop::Fixed;
+    double eta = 0.01;           ///< eta_avg: target average compression (fraction of rho0)
+    std::optional<double> eta_max;       ///< default 10 eta (Ihmsen sec. 3.3)
+    std::optional<double> delta_shock;   ///< eq. 25 threshold; default 4 eta, within (eta, eta_max)
+};
+
+/// @brief Boundary handling of PCISPH (`boundary` section of a scene).
+struct BoundaryParams {
+    BoundaryHandling handling = BoundaryHandling::Ihmsen;
+    double friction = 1.0;  ///< epsilon of Ihmsen eq. 12: 1 keeps the tangential velocity (free slip)
 };
 
 struct SimulationParams {
@@ -60,6 +88,9 @@ struct FluidParams {
     double viscosity = 0.1;           ///< Monaghan artificial viscosity alpha (dimensionless).
     std::optional<double> speed_of_sound;  ///< m/s; default from density_fluctuation.
     double density_fluctuation = 0.01;     ///< target |rho/rho0 - 1| for the default c_s.
+    /// Becker & Teschner 2007 eq. 13 cohesion coefficient kappa (m^3/s^2):
+    /// a_i = -kappa sum_j (m_j/m_i) x_ij W_ij. 0: no surface-tension system (PCISPH only).
+    double surface_tension = 0.0;
 };
 
 /// @brief A block of fluid particles on a cubic lattice of spacing 2 r, filling [min, max].
@@ -125,6 +156,8 @@ struct Scene {
     std::vector<FluidBlock> fluid_blocks;
     std::vector<BoundaryDesc> boundaries;
     OutputParams output;
+    PcisphParams pcisph;      ///< method "pcisph" only
+    BoundaryParams boundary;  ///< method "pcisph" only
 
     /// @brief Particle radius after `scale`.
     double particle_radius() const;

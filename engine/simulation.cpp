@@ -246,6 +246,8 @@ Simulation::Simulation(const Scene& scene, Recipe recipe) {
         setup.run();
     }
     m_graph = std::make_unique<SystemGraph>(std::move(recipe.step), m_world);
+    m_rollback_steps = recipe.rollback_steps;
+    if (m_rollback_steps > 0) m_ring = std::make_unique<StateRing>(m_rollback_steps);
 }
 
 std::size_t Simulation::particle_bytes() const {
@@ -267,12 +269,44 @@ void Simulation::step() {
     const int interval = m_world.scene.simulation.sort_interval;
     if (interval > 0 && m_world.step.step % interval == 0) spatial_sort();
     StepState& st = m_world.step;
+    if (m_ring) m_ring->save(m_world);
+    st.rolled_back = false;
     if (m_world.scene.simulation.stepping.mode == SteppingMode::Constant) {
         // Constant stepping has no dt system: the step is the scene's, clipped at the end.
         st.dt_stable = m_world.scene.simulation.stepping.dt;
         st.set_dt_clipped(st.dt_stable);
     }
     m_graph->run();
+    st.last_step = st.step;
+    st.last_t = st.t;
+    st.last_dt = st.dt;
+    if (m_ring && m_world.pcisph.rollback_dt > 0) {
+        // Shock (Ihmsen 2010 eq. 25-27): back to the state `m_rollback_steps` steps ago, resumed
+        // with the step of eq. 24. The step counter, the shock count and the record of the
+        // discarded step survive the restore.
+        const double resume_dt = m_world.pcisph.rollback_dt;
+        const StepState discarded = st;
+        m_ring->restore(m_world, m_rollback_steps);
+        StepState& r = m_world.step;
+        r.step = discarded.step + 1;
+        r.shocks = discarded.shocks + 1;
+        r.rolled_back = true;
+        r.last_step = discarded.last_step;
+        r.last_t = discarded.last_t;
+        r.last_dt = discarded.last_dt;
+        // The discarded step's statistics stay visible to the recorder.
+        r.rho_err_avg = discarded.rho_err_avg;
+        r.rho_err_max = discarded.rho_err_max;
+        r.v_max = discarded.v_max;
+        r.a_max = discarded.a_max;
+        r.iterations = discarded.iterations;
+        r.boundary_active = discarded.boundary_active;
+        r.collisions = discarded.collisions;
+        r.dt_stable = discarded.dt_stable;
+        m_world.pcisph.pending_dt = resume_dt;
+        m_world.pcisph.rollback_dt = 0;
+        return;
+    }
     check_step();
     m_world.step.t_ticks += m_world.step.dt_ticks;
     m_world.step.t = to_seconds(m_world.step.t_ticks);

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "engine/system.hpp"
+#include "engine/state_ring.hpp"
 #include "engine/system_graph.hpp"
 #include "engine/world.hpp"
 
@@ -16,6 +17,10 @@ namespace sph {
 struct Recipe {
     std::vector<std::unique_ptr<System>> setup;
     std::vector<std::unique_ptr<System>> step;
+    /// States kept for a shock rollback (0: none). A step system requests a rollback by setting
+    /// world.pcisph.rollback_dt > 0; Simulation::step then restores the state saved
+    /// `rollback_steps` steps back and the next step takes rollback_dt (Ihmsen 2010 eq. 24).
+    std::size_t rollback_steps = 0;
 };
 
 /// @brief Samples the scene into a World: fluid lattice, boundary surfaces, the derived
@@ -47,6 +52,8 @@ private:
 
     World m_world;
     std::unique_ptr<SystemGraph> m_graph;
+    std::size_t m_rollback_steps = 0;
+    std::unique_ptr<StateRing> m_ring;
 };
 
 }  // namespace sph

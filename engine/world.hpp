@@ -29,6 +29,11 @@ inline const std::string collisions = "step.collisions";
 inline const std::string active_set = "fluid.active_set";
 inline const std::string halo_set = "fluid.halo_set";
 inline const std::string moving_bodies = "boundary.moving_bodies";
+// PCISPH (Ihmsen et al. 2010 Alg. 2).
+inline const std::string boundary_active = "boundary.active_set";          ///< + boundary->fluid lists
+inline const std::string pcisph_delta = "pcisph.delta";                    ///< delta of eq. 4-5
+inline const std::string pcisph_errors = "pcisph.errors";                  ///< predicted rho_err of the last pass
+inline const std::string pcisph_controller = "pcisph.controller";          ///< next dt, shock request
 }  // namespace res
 
 /// @brief Constants derived from the scene once (SI units).
@@ -75,6 +80,15 @@ struct StepState {
     std::uint64_t force_evaluations = 0;       ///< fluid particles whose forces were evaluated
     std::uint64_t boundary_contributions = 0;  ///< boundary list entries of those particles
     std::uint64_t propagation_updates = 0;     ///< particles whose Delta t_i was recomputed
+    // PCISPH.
+    int iterations = 0;                ///< prediction-correction passes
+    std::uint64_t boundary_active = 0; ///< active boundary particles
+    bool rolled_back = false;          ///< this step was discarded by a shock rollback
+    std::uint64_t shocks = 0;          ///< rollbacks so far (kept through rollbacks)
+    // The step just taken, as the recorder reports it (set by Simulation::step, also when the
+    // step is rolled back and t and step no longer describe it).
+    std::int64_t last_step = 0;
+    double last_t = 0, last_dt = 0;
 
     /// @brief Sets the step (quantised down to whole ticks, at least one tick).
     void set_dt(double seconds) {
@@ -92,6 +106,29 @@ struct StepState {
             }
         }
     }
+};
+
+/// @brief PCISPH state carried between steps (Ihmsen et al. 2010 Alg. 2 and sec. 3.3). Saved
+/// and restored with the particle columns by a rollback.
+struct PcisphState {
+    double delta = 0;        ///< eq. 4-5 for delta_dt
+    double delta_dt = 0;     ///< the step delta was computed for (recomputed when dt changes)
+    int iterations = 0;      ///< prediction-correction passes this step
+    double pred_err_max = 0, pred_err_avg = 0;  ///< last pass: max and mean of max(rho*/rho0 - 1, 0)
+    double pending_dt = 0;   ///< adaptive: the step the next step takes (0: the initial rule)
+    double rollback_dt = 0;  ///< > 0: a shock was detected; roll back and resume with this step (eq. 24)
+    double prev_err_max = -1;  ///< rho_err^max(t - dt) for eq. 25 (< 0: none yet)
+    double v_max_tracked = 0, a_max_tracked = 0;  ///< over all kept steps: v^max, F^max of eq. 14-15
+    double rho_err_avg_max = 0;  ///< max over kept steps of rho_err^avg
+    int reason = 0;          ///< adaptive controller's last decision (see AdaptiveDecision)
+};
+
+/// @brief Boundary particles with at least one fluid neighbour (Ihmsen 2010 sec. 3.4: only
+/// those are active) and their fluid neighbours, as compressed rows over the active set.
+struct BoundaryActive {
+    std::vector<Index> set;     ///< ascending boundary indices
+    std::vector<Index> start;   ///< set.size() + 1 offsets into `fluid`
+    std::vector<Index> fluid;   ///< fluid neighbours (r < h) of each active boundary particle
 };
 
 /// @brief A boundary that moves with a kinematic motion: its boundary particles are the
@@ -132,6 +169,8 @@ struct World {
     /// Boundary particles [0, static_boundary_end) never move (z-ordered once).
     std::size_t static_boundary_end = 0;
     StepState step;
+    PcisphState pcisph;
+    BoundaryActive boundary_active;
 };
 
 }  // namespace sph

@@ -1,6 +1,7 @@
 #include "systems/methods/wcsph.hpp"
 
 #include "systems/active/select_active_system.hpp"
+#include "systems/methods/pcisph.hpp"
 #include "systems/boundary/boundary_collision_system.hpp"
 #include "systems/boundary/boundary_motion_system.hpp"
 #include "systems/boundary/boundary_volume_system.hpp"
@@ -49,6 +50,8 @@ Recipe make_recipe(const Scene& scene) {
     switch (scene.simulation.method) {
         case Method::Wcsph:
             return make_wcsph_recipe(scene);
+        case Method::Pcisph:
+            return make_pcisph_recipe(scene);
     }
     return make_wcsph_recipe(scene);
 }

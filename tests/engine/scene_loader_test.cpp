@@ -128,11 +128,11 @@ TEST(SceneLoader, SuggestionsIgnoreCaseAndAllowTranspositions) {
                               "s.json");
               }),
               "s.json: /simulation/stepping/mode: found \"Global\", expected one of \"constant\", "
-              "\"global\", \"individual\" (did you mean \"global\"?)");
+              "\"global\", \"individual\", \"adaptive\" (did you mean \"global\"?)");
     EXPECT_EQ(
         error_of([] { parse_scene(R"({"name": "t", "fluid": {"viscostiy": 0.1}})", "s.json"); }),
         "s.json: /fluid: found unknown key \"viscostiy\", expected one of: rest_density, "
-        "particle_radius, viscosity, speed_of_sound, density_fluctuation (did you mean "
+        "particle_radius, viscosity, speed_of_sound, density_fluctuation, surface_tension (did you mean "
         "\"viscosity\"?)");
 }
 
@@ -307,7 +307,7 @@ TEST(SceneLoader, InvalidOverrideSaysItWasSetOnTheCommandLine) {
                   parse_scene(k_minimal, "m.json", {{"/simulation/stepping/mode", "globel"}});
               }),
               "m.json: /simulation/stepping/mode: found \"globel\", expected one of \"constant\", "
-              "\"global\", \"individual\" (did you mean \"global\"?) (set on the command line)");
+              "\"global\", \"individual\", \"adaptive\" (did you mean \"global\"?) (set on the command line)");
     EXPECT_EQ(error_of([] {
                   parse_scene(k_minimal, "m.json", {{"/simulation/endtime", 2}});
               }),

@@ -1,0 +1,75 @@
+// Ihmsen et al. 2010 Alg. 2 as a recipe. Why the loop is a sub-graph run k times and not a
+// cycle in the outer graph: the outer graph is a DAG derived from declared accesses and built
+// once; a cycle would need a conditional (multifunction) node and edges that bypass the
+// derivation. A RepeatSystem keeps both graphs acyclic and derived, its body's phases still
+// run as separate, timed nodes (fluid and boundary density concurrently), and the number of
+// passes is decided from data after each pass (until_converged) at no extra cost.
+#include "systems/methods/pcisph.hpp"
+
+#include "engine/repeat_system.hpp"
+#include "engine/world.hpp"
+#include "systems/boundary/boundary_collision_system.hpp"
+#include "systems/boundary/boundary_motion_system.hpp"
+#include "systems/boundary/boundary_volume_system.hpp"
+#include "systems/boundary/pcisph_boundary_systems.hpp"
+#include "systems/forces/nonpressure_forces_system.hpp"
+#include "systems/metrics/step_stats_system.hpp"
+#include "systems/neighbours/neighbour_search_system.hpp"
+#include "systems/pcisph/pcisph_systems.hpp"
+#include "systems/timestep/adaptive_dt_system.hpp"
+
+namespace sph {
+
+Recipe make_pcisph_recipe(const Scene& scene) {
+    PcisphConfig c;
+    c.boundary = !scene.boundaries.empty();
+    c.ihmsen = c.boundary && scene.boundary.handling == BoundaryHandling::Ihmsen;
+    c.moving = has_moving_boundaries(scene);
+    c.adaptive = scene.simulation.stepping.mode == SteppingMode::Adaptive;
+    c.nonpressure = scene.fluid.viscosity > 0 || scene.fluid.surface_tension > 0;
+
+    Recipe r;
+    if (c.boundary) r.setup.push_back(std::make_unique<BoundaryVolumeSystem>());
+    if (c.ihmsen) r.setup.push_back(std::make_unique<BoundaryMassSystem>());
+
+    if (c.moving) r.step.push_back(std::make_unique<BoundaryMotionSystem>());
+    r.step.push_back(std::make_unique<PcisphStepSizeSystem>(c.adaptive));
+    r.step.push_back(std::make_unique<FluidGridSystem>());
+    r.step.push_back(std::make_unique<FluidNeighbourSystem>());
+    if (c.boundary) r.step.push_back(std::make_unique<BoundaryNeighbourSystem>());
+    if (c.ihmsen) r.step.push_back(std::make_unique<BoundaryActiveSystem>());
+    if (c.nonpressure) r.step.push_back(std::make_unique<NonpressureForcesSystem>(c.boundary, c.moving));
+    r.step.push_back(std::make_unique<PcisphResetSystem>(c.ihmsen));
+
+    std::vector<std::unique_ptr<System>> body;
+    body.push_back(std::make_unique<PcisphPredictSystem>(c.nonpressure));
+    if (c.boundary) body.push_back(std::make_unique<DirectForcingSystem>(/*predicted=*/true, c.moving));
+    body.push_back(std::make_unique<PcisphDensitySystem>(c.ihmsen));
+    if (c.ihmsen) body.push_back(std::make_unique<PcisphBoundaryDensitySystem>());
+    body.push_back(std::make_unique<PcisphPressureForceSystem>(c.ihmsen));
+    const PcisphParams p = scene.pcisph;
+    auto more = [p](const World& w, int k) {
+        if (p.loop == PcisphLoop::Fixed) return k < p.iterations;
+        // Solenthaler & Pajarola 2009: while max rho_err* > eta or k < 3 (here `iterations`).
+        return k < p.max_iterations && (w.pcisph.pred_err_max > p.eta || k < p.iterations);
+    };
+    auto done = [](World& w, int k) {
+        w.pcisph.iterations = k;
+        w.step.iterations = k;
+    };
+    r.step.push_back(std::make_unique<RepeatSystem>("pcisph_iterations", std::move(body), more, done));
+
+    r.step.push_back(std::make_unique<PcisphIntegrateSystem>(c.nonpressure));
+    if (c.boundary) {
+        r.step.push_back(std::make_unique<DirectForcingSystem>(/*predicted=*/false, c.moving));  // eq. 11-12
+        r.step.push_back(std::make_unique<BoundaryCollisionSystem>(c.moving));                   // safety net
+    }
+    r.step.push_back(std::make_unique<StepStatsSystem>(false));
+    if (c.adaptive) {
+        r.step.push_back(std::make_unique<AdaptiveDtSystem>());
+        r.rollback_steps = 2;  // sec. 3.3: "we go two simulation steps backwards"
+    }
+    return r;
+}
+
+}  // namespace sph

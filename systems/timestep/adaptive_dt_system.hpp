@@ -1,0 +1,23 @@
+#pragma once
+/// @file adaptive_dt_system.hpp
+/// @brief Ihmsen et al. 2010 sec. 3.3 at the end of a step: shock detection (eq. 25-27) with a
+/// rollback request and the step of eq. 24, else the +-0.2 % rule of eq. 16-23 for the next
+/// step. Tracks v^max and F^max (eq. 14-15) over the kept steps.
+#include "engine/system.hpp"
+#include "systems/timestep/adaptive_controller.hpp"
+
+namespace sph {
+
+struct World;
+
+/// @brief The controller's parameters from the scene (h, eta, eta_max, delta_shock, dt_max).
+AdaptiveParams adaptive_params(const World& w);
+
+class AdaptiveDtSystem final : public System {
+public:
+    std::string name() const override { return "adaptive_dt"; }
+    Access access() const override;
+    void run(World& w) override;
+};
+
+}  // namespace sph
