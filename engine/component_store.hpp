@@ -33,6 +33,10 @@ public:
     virtual void permute(std::span<const Index> perm) = 0;
     virtual std::size_t bytes() const = 0;
     virtual const std::type_info& type() const = 0;
+    /// @brief Bytes of one element (checkpoints copy columns as raw bytes).
+    virtual std::size_t element_size() const = 0;
+    /// @brief The column's elements as raw bytes (size() * element_size()).
+    virtual std::span<std::byte> raw() = 0;
 };
 
 /// @brief The value new column entries get: zero (Eigen's default constructor leaves
@@ -57,6 +61,8 @@ public:
     }
     std::size_t bytes() const override { return data.capacity() * sizeof(T); }
     const std::type_info& type() const override { return typeid(T); }
+    std::size_t element_size() const override { return sizeof(T); }
+    std::span<std::byte> raw() override { return std::as_writable_bytes(std::span<T>(data)); }
 
 private:
     std::vector<T> m_scratch;
@@ -87,6 +93,19 @@ public:
     }
 
     bool has(std::string_view name) const { return m_columns.find(name) != m_columns.end(); }
+    /// @brief Element type of a registered column (throws std::logic_error if unknown).
+    const std::type_info& type_of(std::string_view name) const {
+        return const_cast<ComponentStore*>(this)->find(name).type();
+    }
+    /// @brief A registered column as raw bytes, for copying it whole (checkpoints).
+    /// @warning Only for trivially copyable element types (every engine component is).
+    std::span<std::byte> raw(std::string_view name) { return find(name).raw(); }
+    std::span<const std::byte> raw(std::string_view name) const {
+        return const_cast<ComponentStore*>(this)->find(name).raw();
+    }
+    std::size_t element_size(std::string_view name) const {
+        return const_cast<ComponentStore*>(this)->find(name).element_size();
+    }
     std::size_t size() const { return m_size; }
     /// @brief Resizes every column; new entries are value-initialised.
     void resize(std::size_t n) {
