@@ -37,6 +37,10 @@ public:
     virtual std::unique_ptr<ColumnBase> empty_clone() const = 0;
     /// @brief Copies the values of a column of the same type (reusing this column's storage).
     virtual void assign(const ColumnBase& other) = 0;
+    /// @brief Bytes of one element (checkpoints copy columns as raw bytes).
+    virtual std::size_t element_size() const = 0;
+    /// @brief The column's elements as raw bytes (size() * element_size()).
+    virtual std::span<std::byte> raw() = 0;
 };
 
 /// @brief The value new column entries get: zero (Eigen's default constructor leaves
@@ -66,6 +70,8 @@ public:
         const auto& src = static_cast<const Column<T>&>(other).data;
         data.assign(src.begin(), src.end());
     }
+    std::size_t element_size() const override { return sizeof(T); }
+    std::span<std::byte> raw() override { return std::as_writable_bytes(std::span<T>(data)); }
 
 private:
     std::vector<T> m_scratch;
@@ -96,6 +102,19 @@ public:
     }
 
     bool has(std::string_view name) const { return m_columns.find(name) != m_columns.end(); }
+    /// @brief Element type of a registered column (throws std::logic_error if unknown).
+    const std::type_info& type_of(std::string_view name) const {
+        return const_cast<ComponentStore*>(this)->find(name).type();
+    }
+    /// @brief A registered column as raw bytes, for copying it whole (checkpoints).
+    /// @warning Only for trivially copyable element types (every engine component is).
+    std::span<std::byte> raw(std::string_view name) { return find(name).raw(); }
+    std::span<const std::byte> raw(std::string_view name) const {
+        return const_cast<ComponentStore*>(this)->find(name).raw();
+    }
+    std::size_t element_size(std::string_view name) const {
+        return const_cast<ComponentStore*>(this)->find(name).element_size();
+    }
     std::size_t size() const { return m_size; }
     /// @brief Resizes every column; new entries are value-initialised.
     void resize(std::size_t n) {

@@ -3,6 +3,8 @@
 /// @brief Owns a World and the flow graph of a method's systems, and advances time.
 #include <functional>
 #include <memory>
+#include <mutex>
+#include <string>
 #include <vector>
 
 #include "engine/system.hpp"
@@ -49,11 +51,22 @@ public:
 private:
     void check_step();
     void spatial_sort();
+    /// Scans the fluid columns system i writes for non-finite values (NaN, inf) and keeps
+    /// the earliest system in recipe order that produced one this step.
+    void trace_non_finite(std::size_t system);
 
     World m_world;
     std::unique_ptr<SystemGraph> m_graph;
     std::size_t m_rollback_steps = 0;
     std::unique_ptr<StateRing> m_ring;
+    /// The first non-finite value of the step: system (recipe index), particle, column.
+    struct NonFinite {
+        std::size_t system = SIZE_MAX;
+        std::size_t particle = 0;
+        std::string column;
+    };
+    std::mutex m_trace_mutex;
+    NonFinite m_non_finite;
 };
 
 }  // namespace sph

@@ -67,6 +67,7 @@ SystemGraph::SystemGraph(std::vector<std::unique_ptr<System>> systems, World& wo
                 }
                 try {
                     sys->run(world);
+                    if (m_after) m_after(i);
                 } catch (...) {
                     std::lock_guard lock(m_impl->error_mutex);
                     if (!m_impl->error) m_impl->error = std::current_exception();

@@ -4,6 +4,7 @@
 /// once per run, and runs it every step. Each node is timed.
 #include <chrono>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <utility>
 #include <vector>
@@ -36,6 +37,10 @@ public:
     /// @brief Seconds the i-th system took in the last run, and over all runs.
     double last_seconds(std::size_t i) const { return m_last[i]; }
     double total_seconds(std::size_t i) const { return m_total[i]; }
+    /// @brief Called in the node right after system i ran (concurrently for independent
+    /// systems), before its dependents start: the simulation checks the system's output
+    /// there, so a NaN is traced to the system that produced it.
+    void set_after_system(std::function<void(std::size_t)> fn) { m_after = std::move(fn); }
     /// @brief Writes the graph in Graphviz dot form, nodes labelled with their accesses.
     void write_dot(const std::filesystem::path& file) const;
 
@@ -44,6 +49,7 @@ private:
     std::vector<std::unique_ptr<System>> m_systems;
     std::vector<Edge> m_edges;
     std::vector<double> m_last, m_total;
+    std::function<void(std::size_t)> m_after;
     std::unique_ptr<Impl> m_impl;
 };
 

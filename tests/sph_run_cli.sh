@@ -35,6 +35,14 @@ check "leaving the domain exits 3 (got $rc)" '[ $rc -eq 3 ]'
 check "diagnosis names particle, step and system" 'grep -qE "particle [0-9]+ left the domain at step [0-9]+ .*moved by system .integrate." "$tmp/err4"'
 check "outputs written before the failure remain" '[ -f "$tmp/fall/stats.csv" ] && [ -f "$tmp/fall/summary.json" ]'
 
+# 4b. A NaN injected into particle 5 in step 3: exit 3 naming that particle, step and system.
+"$run" "$src/scenes/dam_break.json" --end 0.01 --inject-nan 3:5 --out "$tmp/nan" -q 2>"$tmp/err5"; rc=$?
+check "injected NaN exits 3 (got $rc)" '[ $rc -eq 3 ]'
+check "diagnosis names particle 5, step 3 and inject_nan" 'grep -q "particle 5 became non-finite at step 3 (t = .*): acceleration is NaN or infinite, first produced by system .inject_nan." "$tmp/err5"'
+check "frames written before the NaN remain complete" '[ -f "$tmp/nan/frames/frame_00000.vtu" ] && [ -z "$(find "$tmp/nan" -name "*.tmp*")" ]'
+"$run" "$src/scenes/dam_break.json" --inject-nan 3 --out "$tmp/nan2" 2>"$tmp/err6"; rc=$?
+check "malformed --inject-nan exits 2 (got $rc)" '[ $rc -eq 2 ] && grep -q "expected STEP:ID" "$tmp/err6" && [ ! -e "$tmp/nan2" ]'
+
 # 5. --help and --version.
 "$run" --version | grep -q "sph-run" ; check "--version" '[ $? -eq 0 ]'
 "$run" --help | grep -q -- "--graph" ; check "--help lists --graph" '[ $? -eq 0 ]'

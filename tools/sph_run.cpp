@@ -13,6 +13,7 @@
 
 #include "engine/errors.hpp"
 #include "engine/recorder.hpp"
+#include "systems/debug/nan_injection_system.hpp"
 #include "systems/methods/wcsph.hpp"
 
 namespace {
@@ -36,6 +37,7 @@ int main(int argc, char** argv) {
     int threads = 0;
     std::vector<std::string> sets;
     bool quiet = false, no_frames = false;
+    std::string inject_nan;
     app.add_option("scene", scene_file, "Scene file (JSON)")->required();
     app.add_option("--mode", mode, "Stepping mode: constant | global | individual");
     app.add_option("--end", end_time, "Simulated end time in seconds (overrides simulation.end_time)");
@@ -46,6 +48,9 @@ int main(int argc, char** argv) {
     app.add_option("--graph", graph_file, "Write the system graph as Graphviz dot to this file");
     app.add_option("--set", sets, "Override a scene value: --set simulation.stepping.lambda_v=0.1 (repeatable)");
     app.add_flag("--no-frames", no_frames, "Write no particle frames");
+    app.add_option("--inject-nan", inject_nan,
+                   "Testing aid: STEP:ID puts a NaN into particle ID's acceleration in step STEP, to exercise the "
+                   "failure diagnosis (exit 3)");
     app.add_flag("-q,--quiet", quiet, "Log warnings and errors only");
     try {
         app.parse(argc, argv);
@@ -74,7 +79,17 @@ int main(int argc, char** argv) {
         tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(nthreads));
 
         const auto t_setup = std::chrono::steady_clock::now();
-        sim = sph::make_simulation(scene);
+        sph::Recipe recipe = sph::make_recipe(scene);
+        if (!inject_nan.empty()) {
+            long long step = -1, id = -1;
+            char tail = 0;
+            if (std::sscanf(inject_nan.c_str(), "%lld:%lld%c", &step, &id, &tail) != 2 || step < 0 || id < 0 ||
+                id > 0xffffffffLL)
+                throw sph::InputError("--inject-nan: found \"" + inject_nan +
+                                      "\", expected STEP:ID with a step index >= 0 and a particle id >= 0");
+            sph::add_nan_injection(recipe, step, std::uint32_t(id));
+        }
+        sim = std::make_unique<sph::Simulation>(scene, std::move(recipe));
         const auto& w = sim->world();
         spdlog::info("scene '{}' from {}: {} fluid + {} boundary particles, r = {} m, h = {} m, c_s = {:.3g} m/s, "
                      "mass = {:.4g} kg, method {} / {}, end {} s, {} thread(s), set-up {:.2f} s",
