@@ -127,7 +127,7 @@ TEST(Vtu, DoubleAndByteColumnsRoundTripByteExact) {
     const auto dir = std::filesystem::temp_directory_path() / "sph_io_test_individual";
     std::filesystem::remove_all(dir);
     const auto file = dir / "frame.vtu";
-    write_vtu(file, w, {"density"});  // density not registered here: skipped
+    write_vtu(file, w, {"density", "dt", "active"});  // density not registered here: skipped
     const VtuArrays a = read_vtu(file);
     ASSERT_EQ(a.types.at("dt"), "Float64");
     ASSERT_EQ(a.types.at("active"), "UInt8");
