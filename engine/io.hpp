@@ -2,6 +2,7 @@
 /// @file io.hpp
 /// @brief Output files. Every file is written to a temporary name beside it and renamed, so
 /// a killed run leaves only complete files.
+#include <cstdint>
 #include <filesystem>
 #include <string>
 #include <string_view>
@@ -11,15 +12,60 @@ namespace sph {
 
 struct World;
 
-/// @brief Writes `content` to `file` atomically (temporary file, fsync-free rename).
+/// @brief A file written under no name, or a temporary one, and renamed onto its target by
+/// commit(): readers (and a killed run) only ever see the old complete file or the new one.
+/// On Linux the data goes into an unnamed O_TMPFILE in the target's directory, which the
+/// kernel discards if the process dies before commit(); the name appears with linkat(2) under
+/// a temporary name that rename(2) moves onto the target at once. Elsewhere (a filesystem
+/// without O_TMPFILE) a named temporary "<file>.tmp<pid>.<n>" is written and renamed.
+class AtomicFile {
+public:
+    explicit AtomicFile(std::filesystem::path target);
+    ~AtomicFile();  ///< without commit(): the data is discarded
+    AtomicFile(const AtomicFile&) = delete;
+    AtomicFile& operator=(const AtomicFile&) = delete;
+    void write(std::string_view bytes);
+    /// @brief Appends the first `bytes` bytes of an existing file (e.g. the committed prefix
+    /// of the target itself); throws InputError if it holds fewer.
+    void copy_prefix(const std::filesystem::path& from, std::uint64_t bytes);
+    void commit();
+
+private:
+    std::filesystem::path m_target, m_named_tmp;
+    int m_fd = -1;
+    bool m_unnamed = false;
+};
+
+/// @brief Writes `content` to `file` atomically (an AtomicFile; no fsync).
 void write_file_atomic(const std::filesystem::path& file, std::string_view content);
 
+/// @brief The point attributes a frame holds, from the scene's `output.attributes`: exactly
+/// those when the scene lists them; otherwise the default list plus `dt` and `active` when the
+/// method has those columns (individual stepping). Position and id are always written.
+std::vector<std::string> frame_attributes(const World& world);
+
 /// @brief Writes the fluid particles as a VTK UnstructuredGrid (.vtu), binary appended raw
-/// data, with the given point attributes (columns of the fluid store) for ParaView, then
-/// `dt` (Float64, s) and `active` (UInt8) when the store has them (individual stepping),
-/// then `id`. Field data `TimeValue` holds the simulated time at full precision.
+/// data, for ParaView: `position` as the points, then the given attributes (any of velocity,
+/// density, pressure, acceleration as stored; `dt` as Float64 seconds; `active` as UInt8),
+/// then `id`. Field data `TimeValue` holds the simulated time at full precision. Attributes
+/// the store does not hold are skipped.
 void write_vtu(const std::filesystem::path& file, const World& world,
                const std::vector<std::string>& attributes);
+
+/// @brief Writes the same arrays as a Houdini classic BGEO (version 5, uncompressed, the
+/// format partio reads): P, then `v` (velocity), `accel`, density, pressure, dt (float32),
+/// active and id (int32).
+void write_bgeo(const std::filesystem::path& file, const World& world,
+                const std::vector<std::string>& attributes);
+
+/// @brief Writes the same arrays as binary little-endian PLY (one vertex element), for
+/// Blender: x y z, vectors as <name>_x/_y/_z, scalars as <name>.
+void write_ply(const std::filesystem::path& file, const World& world,
+               const std::vector<std::string>& attributes);
+
+/// @brief Writes `stem`.vtu / .bgeo / .ply, one per format of the scene's `output.formats`,
+/// with frame_attributes(world).
+void write_frame(const std::filesystem::path& stem, const World& world);
 
 /// @brief Peak resident memory of this process in bytes (getrusage).
 std::size_t peak_memory_bytes();

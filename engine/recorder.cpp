@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "engine/components.hpp"
+#include "engine/errors.hpp"
 #include "engine/io.hpp"
 
 namespace sph {
@@ -24,16 +25,77 @@ double front_x(const World& w) {
     return std::isfinite(front) ? front : 0.0;
 }
 
-Recorder::Recorder(std::filesystem::path dir, const Simulation& sim) : m_dir(std::move(dir)) {
-    std::filesystem::create_directories(m_dir);
+namespace {
+constexpr std::size_t kMaxPendingStats = std::size_t(4) << 20;  // bytes of rows held in memory
+}
+
+std::string Recorder::header(const Simulation& sim) const {
     std::ostringstream h;
     h << "step,t,dt,updated,neighbours_per_particle,rho_err_avg,rho_err_max,v_max,a_max,collisions,"
          "active,active_fraction,neighbour_searches,force_evaluations,boundary_contributions,"
          "propagation_updates,iterations,boundary_active,rolled_back,wall_s";
     for (const auto& s : sim.graph().systems()) h << ",ms_" << s->name();
     h << '\n';
-    m_csv = h.str();
+    return h.str();
+}
+
+Recorder::Recorder(std::filesystem::path dir, const Simulation& sim) : m_dir(std::move(dir)) {
+    std::filesystem::create_directories(m_dir);
+    m_pending = header(sim);
     m_t0 = std::chrono::steady_clock::now();
+}
+
+Recorder::Recorder(std::filesystem::path dir, const Simulation& sim, const nlohmann::json& st)
+    : m_dir(std::move(dir)) {
+    std::filesystem::create_directories(m_dir);
+    m_frame = st.at("frame").get<std::size_t>();
+    m_next_frame_time = st.at("next_frame_time").get<double>();
+    m_collisions = st.at("collisions").get<std::uint64_t>();
+    m_active_fraction_sum = st.at("active_fraction_sum").get<double>();
+    m_dt_min = st.at("dt_min").get<double>();
+    m_dt_max = st.at("dt_max").get<double>();
+    m_rho_err_max = st.at("rho_err_max").get<double>();
+    m_steps = st.at("steps").get<std::uint64_t>();
+    m_boundary_ratio_sum = st.at("boundary_ratio_sum").get<double>();
+    m_rho_err_avg_max = st.at("rho_err_avg_max").get<double>();
+    m_iterations_sum = st.at("iterations_sum").get<std::uint64_t>();
+    for (const auto& f : st.at("fronts")) m_fronts.emplace_back(f.at(0).get<double>(), f.at(1).get<double>());
+    const std::uint64_t bytes = st.at("stats_bytes").get<std::uint64_t>();
+    const auto csv = m_dir / "stats.csv";
+    std::error_code ec;
+    const auto have = std::filesystem::file_size(csv, ec);
+    if (ec) {
+        m_pending = header(sim);  // a new directory: stats.csv starts at the checkpoint's step
+    } else if (have < bytes) {
+        throw InputError(csv.string() + ": holds " + std::to_string(have) + " bytes, expected at least the " +
+                         std::to_string(bytes) + " written before the checkpoint (resume into another --out)");
+    } else {
+        m_stats_bytes = bytes;
+        if (have > bytes) {
+            // Rows written after the checkpoint will be written again: keep only the prefix.
+            AtomicFile f(csv);
+            f.copy_prefix(csv, bytes);
+            f.commit();
+        }
+    }
+    m_t0 = std::chrono::steady_clock::now();
+}
+
+nlohmann::json Recorder::state() {
+    flush_stats();
+    return {{"frame", m_frame},
+            {"next_frame_time", m_next_frame_time},
+            {"collisions", m_collisions},
+            {"active_fraction_sum", m_active_fraction_sum},
+            {"dt_min", m_dt_min},
+            {"dt_max", m_dt_max},
+            {"rho_err_max", m_rho_err_max},
+            {"steps", m_steps},
+            {"boundary_ratio_sum", m_boundary_ratio_sum},
+            {"rho_err_avg_max", m_rho_err_avg_max},
+            {"iterations_sum", m_iterations_sum},
+            {"fronts", m_fronts},
+            {"stats_bytes", m_stats_bytes}};
 }
 
 void Recorder::begin(const Simulation& sim) {
@@ -42,8 +104,8 @@ void Recorder::begin(const Simulation& sim) {
 
 void Recorder::write_frame(const Simulation& sim) {
     char name[32];
-    std::snprintf(name, sizeof name, "frame_%05zu.vtu", m_frame);
-    write_vtu(m_dir / "frames" / name, sim.world(), sim.world().scene.output.attributes);
+    std::snprintf(name, sizeof name, "frame_%05zu", m_frame);
+    sph::write_frame(m_dir / "frames" / name, sim.world());
     ++m_frame;
     m_next_frame_time = double(m_frame) / sim.world().scene.simulation.frame_rate;
     flush_stats();
@@ -64,7 +126,7 @@ void Recorder::after_step(const Simulation& sim) {
     row << std::setprecision(4);
     for (std::size_t i = 0; i < g.systems().size(); ++i) row << ',' << g.last_seconds(i) * 1e3;
     row << '\n';
-    m_csv += row.str();
+    m_pending += row.str();
     m_collisions += s.collisions;
     if (s.rolled_back) return;  // a discarded step (shock rollback) counts in no statistic
     if (w.fluid.size()) m_active_fraction_sum += double(s.active) / double(w.fluid.size());
@@ -81,10 +143,23 @@ void Recorder::after_step(const Simulation& sim) {
     while (m_fronts.size() < 3 && s.t >= 0.25 * double(m_fronts.size() + 1) * end - 1e-9)
         m_fronts.emplace_back(s.t, front_x(w));
     const double rate = w.scene.simulation.frame_rate;
-    if (rate > 0 && s.t >= m_next_frame_time - 1e-9) write_frame(sim);
+    if (rate > 0 && s.t >= m_next_frame_time - 1e-9) {
+        write_frame(sim);
+    } else if (m_pending.size() > kMaxPendingStats) {
+        flush_stats();
+    }
 }
 
-void Recorder::flush_stats() { write_file_atomic(m_dir / "stats.csv", m_csv); }
+void Recorder::flush_stats() {
+    if (m_pending.empty()) return;
+    const auto csv = m_dir / "stats.csv";
+    AtomicFile f(csv);
+    if (m_stats_bytes > 0) f.copy_prefix(csv, m_stats_bytes);
+    f.write(m_pending);
+    f.commit();
+    m_stats_bytes += m_pending.size();
+    m_pending.clear();
+}
 
 nlohmann::json Recorder::finish(const Simulation& sim, double wall_seconds, int threads) {
     flush_stats();

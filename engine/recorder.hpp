@@ -1,8 +1,11 @@
 #pragma once
 /// @file recorder.hpp
-/// @brief Writes a run's outputs into one directory: stats.csv (a row per step), VTU frames at
-/// the scene's frame rate, and summary.json at the end. Files are written atomically; the CSV
-/// is rewritten whole at each frame boundary, so a killed run leaves a complete prefix.
+/// @brief Writes a run's outputs into one directory: stats.csv (a row per step), frames at
+/// the scene's frame rate (frames/frame_NNNNN.vtu/.bgeo/.ply), and summary.json at the end.
+/// Every file is replaced atomically (AtomicFile). stats.csv is committed at each frame, at
+/// each checkpoint, whenever 4 MiB of rows are pending, and at the end: the new file is the
+/// committed prefix copied from the old one plus the pending rows, so memory stays bounded
+/// and a killed run leaves a complete prefix of whole rows.
 #include <chrono>
 #include <filesystem>
 #include <string>
@@ -21,6 +24,10 @@ double front_x(const World& w);
 class Recorder {
 public:
     Recorder(std::filesystem::path dir, const Simulation& sim);
+    /// @brief Continues a run from a checkpoint: `state` is what state() returned then; the
+    /// first stats_bytes bytes of dir/stats.csv are kept (a fresh stats.csv is started at the
+    /// checkpoint's step when the directory has none).
+    Recorder(std::filesystem::path dir, const Simulation& sim, const nlohmann::json& state);
     /// @brief Called after every step: appends the stats row, writes a frame when due.
     void after_step(const Simulation& sim);
     /// @brief Writes the initial frame (t = 0).
@@ -30,13 +37,19 @@ public:
 
     const std::filesystem::path& dir() const { return m_dir; }
     std::size_t frames_written() const { return m_frame; }
+    /// @brief Commits stats.csv, then returns everything needed to continue the outputs
+    /// exactly (frame counter, next frame time, summary accumulators, committed CSV bytes).
+    nlohmann::json state();
+    /// @brief Commits the pending stats.csv rows.
+    void flush_stats();
 
 private:
     void write_frame(const Simulation& sim);
-    void flush_stats();
+    std::string header(const Simulation& sim) const;
 
     std::filesystem::path m_dir;
-    std::string m_csv;
+    std::string m_pending;           ///< rows not yet committed to stats.csv
+    std::uint64_t m_stats_bytes = 0;  ///< bytes of stats.csv committed so far
     std::size_t m_frame = 0;
     std::uint64_t m_collisions = 0;
     double m_active_fraction_sum = 0;  ///< sum over steps of active / fluid particles

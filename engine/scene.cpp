@@ -83,6 +83,18 @@ const char* to_string(BoundaryShape s) {
     return "unknown";
 }
 
+const char* to_string(FrameFormat f) {
+    switch (f) {
+        case FrameFormat::Vtu:
+            return "vtu";
+        case FrameFormat::Bgeo:
+            return "bgeo";
+        case FrameFormat::Ply:
+            return "ply";
+    }
+    return "unknown";
+}
+
 Vec3d reference_point(const BoundaryDesc& b) {
     return b.shape == BoundaryShape::Sphere ? b.center : Vec3d(0.5 * (b.box.min + b.box.max));
 }
@@ -146,9 +158,10 @@ constexpr std::array<BoundaryShape, 3> k_shapes{BoundaryShape::Container, Bounda
                                                 BoundaryShape::Sphere};
 constexpr std::array<MotionType, 4> k_motion_types{MotionType::Linear, MotionType::Sinusoidal,
                                                   MotionType::Path, MotionType::Circle};
-constexpr std::array<const char*, 1> k_formats{"vtu"};
-constexpr std::array<const char*, 4> k_attributes{"velocity", "density", "pressure",
-                                                  "acceleration"};
+constexpr std::array<FrameFormat, 3> k_formats{FrameFormat::Vtu, FrameFormat::Bgeo,
+                                              FrameFormat::Ply};
+constexpr std::array<const char*, 7> k_attributes{"position", "velocity",     "density", "pressure",
+                                                  "acceleration", "dt",       "active"};
 
 // ---- Small string helpers. ----
 
@@ -1115,14 +1128,34 @@ class Reader {
         require_object(n, "an object");
         check_keys(n, k_output_keys);
         if (const json* v = n.find("format")) {
-            const std::size_t i = pick(n.at(*v, "format"), k_formats);
-            p.format = static_cast<FrameFormat>(i);
+            // One format name, or an array of them (each at most once).
+            const Node f = n.at(*v, "format");
+            std::array<const char*, k_formats.size()> names{};
+            for (std::size_t i = 0; i < names.size(); ++i) names[i] = to_string(k_formats[i]);
+            p.formats.clear();
+            if (v->is_array()) {
+                if (v->empty()) {
+                    fail(f.path, dump(*v), "a format or a non-empty array of formats, each one of " +
+                                               join(names, true));
+                }
+                for (std::size_t i = 0; i < v->size(); ++i) {
+                    const Node e{(*v)[i], child(f.path, i)};
+                    const FrameFormat ff = pick_enum(e, k_formats);
+                    if (std::find(p.formats.begin(), p.formats.end(), ff) != p.formats.end()) {
+                        fail(e.path, dump(e.value), "each format at most once");
+                    }
+                    p.formats.push_back(ff);
+                }
+            } else {
+                p.formats.push_back(pick_enum(f, k_formats));
+            }
         }
         if (const json* v = n.find("attributes")) {
             const Node a = n.at(*v, "attributes");
             require_array(a,
                           ("an array of strings, each one of " + join(k_attributes, true)).c_str());
             p.attributes.clear();
+            p.attributes_explicit = true;
             for (std::size_t i = 0; i < v->size(); ++i) {
                 const Node e{(*v)[i], child(a.path, i)};
                 const char* name = k_attributes[pick(e, k_attributes)];
@@ -1229,8 +1262,7 @@ Scene parse_scene(const std::string& text, const std::string& file,
     return Reader(file, doc, std::move(cli_paths)).read();
 }
 
-Scene load_scene(const std::filesystem::path& file,
-                 const std::vector<std::pair<std::string, nlohmann::json>>& overrides) {
+std::string read_scene_file(const std::filesystem::path& file) {
     const std::string name = file.string();
     const auto cannot = [&](int err) {
         return InputError(name + ": cannot open scene file (" +
@@ -1245,8 +1277,12 @@ Scene load_scene(const std::filesystem::path& file,
     std::size_t n = 0;
     while ((n = std::fread(buf.data(), 1, buf.size(), f.get())) > 0) text.append(buf.data(), n);
     if (std::ferror(f.get())) throw cannot(errno);  // e.g. EISDIR for a directory
+    return text;
+}
 
-    Scene scene = parse_scene(text, name, overrides);
+Scene load_scene(const std::filesystem::path& file,
+                 const std::vector<std::pair<std::string, nlohmann::json>>& overrides) {
+    Scene scene = parse_scene(read_scene_file(file), file.string(), overrides);
     scene.source = file;
     return scene;
 }

@@ -124,13 +124,18 @@ Vec3d reference_point(const BoundaryDesc& b);
 /// @brief The same boundary moved by `d` metres (its motion is kept).
 BoundaryDesc translated(const BoundaryDesc& b, const Vec3d& d);
 
-enum class FrameFormat { Vtu };
+/// @brief Particle frame formats: VTK .vtu (ParaView), Houdini classic .bgeo (partio),
+/// binary .ply (Blender).
+enum class FrameFormat { Vtu, Bgeo, Ply };
+const char* to_string(FrameFormat f);
 
 struct OutputParams {
-    FrameFormat format = FrameFormat::Vtu;
-    /// Particle attributes written per frame: position always; any of
-    /// "velocity", "density", "pressure", "acceleration".
+    std::vector<FrameFormat> formats{FrameFormat::Vtu};
+    /// Particle attributes written per frame, besides position and id (always written): any
+    /// of "position", "velocity", "density", "pressure", "acceleration", "dt", "active".
     std::vector<std::string> attributes{"velocity", "density", "pressure"};
+    /// False: the default list above, to which individual stepping adds dt and active.
+    bool attributes_explicit = false;
 };
 
 /// @brief Particles per axis when a box is filled on a cubic lattice of the given spacing:
@@ -171,6 +176,9 @@ bool has_moving_boundaries(const Scene& scene);
 /// @param overrides JSON-pointer paths and values applied before validation (command line).
 Scene load_scene(const std::filesystem::path& file,
                  const std::vector<std::pair<std::string, nlohmann::json>>& overrides = {});
+
+/// @brief The text of a scene file; throws InputError ("cannot open scene file (reason)").
+std::string read_scene_file(const std::filesystem::path& file);
 
 /// @brief Parses and validates scene JSON text; `file` names it in error messages.
 Scene parse_scene(const std::string& text, const std::string& file,

@@ -29,6 +29,14 @@ check "frames at 30 fps: t = 0 and one more" '[ -f "$tmp/good/frames/frame_00000
 check "graph has the WCSPH nodes" 'grep -q "forces" "$tmp/g.dot" && grep -q -- "->" "$tmp/g.dot"'
 check "no temporary files left" '[ -z "$(find "$tmp/good" -name "*.tmp*")" ]'
 
+# 3b. Every frame format at once: .vtu, .bgeo and .ply per frame, attributes as chosen.
+"$run" "$src/scenes/dam_break.json" --end 0.04 --out "$tmp/fmt" -q --set 'output.format=["vtu","bgeo","ply"]' \
+  --set 'output.attributes=["velocity","dt","active"]'; rc=$?
+check "three formats run exits 0 (got $rc)" '[ $rc -eq 0 ]'
+check "frames 0 and 1 in .vtu, .bgeo and .ply" 'for f in 00000 00001; do for e in vtu bgeo ply; do [ -s "$tmp/fmt/frames/frame_$f.$e" ] || exit 1; done; done'
+check "PLY header lists the chosen attributes" 'head -c 400 "$tmp/fmt/frames/frame_00001.ply" | grep -a -q "property float velocity_x" && head -c 400 "$tmp/fmt/frames/frame_00001.ply" | grep -a -q "property double dt" && ! head -c 400 "$tmp/fmt/frames/frame_00001.ply" | grep -a -q density'
+check "BGEO starts with BgeoV" '[ "$(head -c 5 "$tmp/fmt/frames/frame_00001.bgeo")" = "BgeoV" ]'
+
 # 4. A particle leaving the domain: exit 3 naming the particle, the step and the system.
 "$run" "$src/tests/data/valid/falls_out.json" --out "$tmp/fall" 2>"$tmp/err4"; rc=$?
 check "leaving the domain exits 3 (got $rc)" '[ $rc -eq 3 ]'

@@ -4,6 +4,8 @@
 
 #include <CLI/CLI.hpp>
 #include <chrono>
+#include <cmath>
+#include <optional>
 #include <cstdio>
 #include <iostream>
 
@@ -11,6 +13,7 @@
 #include <tbb/global_control.h>
 #include <tbb/info.h>
 
+#include "engine/checkpoint.hpp"
 #include "engine/errors.hpp"
 #include "engine/recorder.hpp"
 #include "systems/debug/nan_injection_system.hpp"
@@ -37,8 +40,9 @@ int main(int argc, char** argv) {
     int threads = 0;
     std::vector<std::string> sets;
     bool quiet = false, no_frames = false;
-    std::string inject_nan;
-    app.add_option("scene", scene_file, "Scene file (JSON)")->required();
+    std::string inject_nan, resume_file;
+    double checkpoint_every = 0;
+    app.add_option("scene", scene_file, "Scene file (JSON); not with --resume");
     app.add_option("--mode", mode, "Stepping mode: constant | global | individual");
     app.add_option("--end", end_time, "Simulated end time in seconds (overrides simulation.end_time)");
     app.add_option("--dt", dt, "Time step in seconds (constant mode; first step of global)");
@@ -48,6 +52,11 @@ int main(int argc, char** argv) {
     app.add_option("--graph", graph_file, "Write the system graph as Graphviz dot to this file");
     app.add_option("--set", sets, "Override a scene value: --set simulation.stepping.lambda_v=0.1 (repeatable)");
     app.add_flag("--no-frames", no_frames, "Write no particle frames");
+    app.add_option("--checkpoint-every", checkpoint_every,
+                   "Write a checkpoint every T simulated seconds to <out>/checkpoints/checkpoint_NNNNNN.sphckpt");
+    app.add_option("--resume", resume_file,
+                   "Continue the run saved in this checkpoint (its scene and settings; --out, --threads, "
+                   "--checkpoint-every, --graph, -q may be given)");
     app.add_option("--inject-nan", inject_nan,
                    "Testing aid: STEP:ID puts a NaN into particle ID's acceleration in step STEP, to exercise the "
                    "failure diagnosis (exit 3)");
@@ -71,10 +80,37 @@ int main(int argc, char** argv) {
         if (scale >= 0 || app.count("--scale")) overrides.emplace_back("/simulation/scale", scale);
         if (no_frames) overrides.emplace_back("/simulation/frame_rate", 0.0);
         if (threads < 0) throw sph::InputError("--threads: found " + std::to_string(threads) + ", expected a count >= 0");
+        if (app.count("--checkpoint-every") && !(checkpoint_every > 0 && std::isfinite(checkpoint_every)))
+            throw sph::InputError("--checkpoint-every: found " + std::to_string(checkpoint_every) +
+                                  ", expected a time > 0 (simulated seconds)");
+
+        // The scene: from the file and the command line, or (resuming) from the checkpoint,
+        // which keeps the scene's text and overrides so the run continues exactly as it began.
+        std::optional<sph::Checkpoint> checkpoint;
+        std::string scene_text;
+        if (!resume_file.empty()) {
+            if (!scene_file.empty() || !overrides.empty())
+                throw sph::InputError("--resume: found a scene file or scene options, expected none (a resumed run "
+                                      "continues with the checkpoint's scene and settings)");
+            checkpoint = sph::read_checkpoint(resume_file);
+            const auto& m = checkpoint->meta;
+            if (!m.contains("scene_text") || !m.contains("scene_file") || !m.contains("overrides"))
+                throw sph::CheckpointError(resume_file + ": has no scene (written by a program other than sph-run)");
+            scene_file = m["scene_file"].get<std::string>();
+            scene_text = m["scene_text"].get<std::string>();
+            for (const auto& o : m["overrides"]) overrides.emplace_back(o[0].get<std::string>(), o[1]);
+            if (out_dir.empty()) out_dir = m["out"].get<std::string>();
+            if (!app.count("--checkpoint-every")) checkpoint_every = m.value("checkpoint_every", 0.0);
+            spdlog::info("resuming {} at step {}, t = {} s", resume_file, m["step"].get<long long>(),
+                         m["t"].get<double>());
+        } else {
+            if (scene_file.empty()) throw sph::InputError("a scene file is required (or --resume CHECKPOINT)");
+            scene_text = sph::read_scene_file(scene_file);
+        }
         for (const auto& [path, value] : overrides)
             spdlog::info("command line sets {} = {}", path, value.dump());
-
-        const sph::Scene scene = sph::load_scene(scene_file, overrides);
+        sph::Scene scene = sph::parse_scene(scene_text, scene_file, overrides);
+        scene.source = scene_file;
         const int nthreads = threads > 0 ? threads : tbb::info::default_concurrency();
         tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(nthreads));
 
@@ -90,6 +126,7 @@ int main(int argc, char** argv) {
             sph::add_nan_injection(recipe, step, std::uint32_t(id));
         }
         sim = std::make_unique<sph::Simulation>(scene, std::move(recipe));
+        if (checkpoint) sph::restore_checkpoint(*sim, *checkpoint);
         const auto& w = sim->world();
         spdlog::info("scene '{}' from {}: {} fluid + {} boundary particles, r = {} m, h = {} m, c_s = {:.3g} m/s, "
                      "mass = {:.4g} kg, method {} / {}, end {} s, {} thread(s), set-up {:.2f} s",
@@ -102,8 +139,31 @@ int main(int argc, char** argv) {
             spdlog::info("system graph written to {}", graph_file);
         }
         const std::filesystem::path out = out_dir.empty() ? std::filesystem::path("out") / scene.name : std::filesystem::path(out_dir);
-        recorder = std::make_unique<sph::Recorder>(out, *sim);
-        recorder->begin(*sim);
+        if (checkpoint) {
+            recorder = std::make_unique<sph::Recorder>(out, *sim, checkpoint->meta.at("recorder"));
+        } else {
+            recorder = std::make_unique<sph::Recorder>(out, *sim);
+            recorder->begin(*sim);
+        }
+        // Checkpoints at multiples of T simulated seconds (after the step that reaches one).
+        nlohmann::json overrides_json = nlohmann::json::array();
+        for (const auto& [path, value] : overrides) overrides_json.push_back({path, value});
+        double next_checkpoint =
+            checkpoint_every > 0 ? (std::floor(sim->time() / checkpoint_every + 1e-9) + 1) * checkpoint_every : 0.0;
+        auto write_checkpoint = [&](const sph::Simulation& s) {
+            nlohmann::json meta = {{"scene_file", scene_file},
+                                   {"scene_text", scene_text},
+                                   {"overrides", overrides_json},
+                                   {"out", out.string()},
+                                   {"checkpoint_every", checkpoint_every},
+                                   {"step", s.steps()},
+                                   {"t", s.time()},
+                                   {"sph_version", SPH_VERSION}};
+            meta["recorder"] = recorder->state();
+            char name[48];
+            std::snprintf(name, sizeof name, "checkpoint_%06lld.sphckpt", static_cast<long long>(s.steps()));
+            sph::write_checkpoint(out / "checkpoints" / name, s, meta);
+        };
 
         const bool tty = ::isatty(STDERR_FILENO);
         const auto t0 = std::chrono::steady_clock::now();
@@ -111,6 +171,10 @@ int main(int argc, char** argv) {
         const double end = scene.simulation.end_time;
         sim->run_until(end, [&](const sph::Simulation& s) {
             recorder->after_step(s);
+            if (checkpoint_every > 0 && s.time() >= next_checkpoint - 1e-9 && s.time() < end - 1e-9) {
+                write_checkpoint(s);
+                next_checkpoint = (std::floor(s.time() / checkpoint_every + 1e-9) + 1) * checkpoint_every;
+            }
             const auto now = std::chrono::steady_clock::now();
             const double since = std::chrono::duration<double>(now - last_report).count();
             if (since < (tty ? 0.25 : 10.0)) return;

@@ -160,7 +160,7 @@ TEST(SceneLoader, CompleteSceneParsesEveryField) {
         {"type": "box", "min": [1, 0, 0.4], "max": [1.2, 0.3, 0.6]},
         {"type": "sphere", "center": [0.8, 0.5, 0.5], "radius": 0.1}
       ],
-      "output": {"format": "vtu", "attributes": ["acceleration", "velocity"]}
+      "output": {"format": ["ply", "vtu", "bgeo"], "attributes": ["acceleration", "velocity", "dt", "active"]}
     })";
     const Scene s = parse_scene(text, "full.json");
 
@@ -211,8 +211,9 @@ TEST(SceneLoader, CompleteSceneParsesEveryField) {
     EXPECT_EQ(s.boundaries[2].center, Vec3d(0.8, 0.5, 0.5));
     EXPECT_DOUBLE_EQ(s.boundaries[2].radius, 0.1);
 
-    EXPECT_EQ(s.output.format, FrameFormat::Vtu);
-    EXPECT_EQ(s.output.attributes, (std::vector<std::string>{"acceleration", "velocity"}));
+    EXPECT_EQ(s.output.formats, (std::vector<FrameFormat>{FrameFormat::Ply, FrameFormat::Vtu, FrameFormat::Bgeo}));
+    EXPECT_EQ(s.output.attributes, (std::vector<std::string>{"acceleration", "velocity", "dt", "active"}));
+    EXPECT_TRUE(s.output.attributes_explicit);
 
     EXPECT_DOUBLE_EQ(s.particle_radius(), 0.01);  // 0.02 / cbrt(8)
 }
@@ -244,8 +245,9 @@ TEST(SceneLoader, MissingSectionsTakeTheStructDefaults) {
     ASSERT_EQ(s.fluid_blocks.size(), 1u);
     EXPECT_EQ(s.fluid_blocks[0].velocity, Vec3d(0, 0, 0));
     EXPECT_TRUE(s.boundaries.empty());
-    EXPECT_EQ(s.output.format, FrameFormat::Vtu);
+    EXPECT_EQ(s.output.formats, std::vector<FrameFormat>{FrameFormat::Vtu});
     EXPECT_EQ(s.output.attributes, (std::vector<std::string>{"velocity", "density", "pressure"}));
+    EXPECT_FALSE(s.output.attributes_explicit);
     EXPECT_EQ(s.particle_radius(), 0.01);
 }
 

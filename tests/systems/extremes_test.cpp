@@ -241,7 +241,9 @@ TEST(Extremes, LeavingTheDomainStopsTheRun) {
         const auto ids = sim->world().fluid.store.get(comp::id);
         const auto x = sim->world().fluid.store.get(comp::position);
         for (std::size_t i = 0; i < ids.size(); ++i) {
-            if (ids[i] == std::uint32_t(e.particle())) EXPECT_LT(x[i].y(), -0.1f);
+            if (ids[i] == std::uint32_t(e.particle())) {
+                EXPECT_LT(x[i].y(), -0.1f);
+            }
         }
     }
 }
