@@ -299,6 +299,14 @@ void Simulation::step() {
         // discarded step survive the restore.
         const double resume_dt = m_world.pcisph.rollback_dt;
         const StepState discarded = st;
+        if (!(resume_dt >= m_world.scene.simulation.stepping.dt_min)) {
+            std::ostringstream os;
+            os << "shock at step " << st.step << " (t = " << st.t << " s): the step to resume with, " << resume_dt
+               << " s (Ihmsen eq. 24), is below dt_min = " << m_world.scene.simulation.stepping.dt_min
+               << " s; v_max = " << st.v_max << " m/s, F_max = " << st.a_max << " m/s^2 at particle "
+               << st.a_max_particle;
+            throw SimulationError(os.str(), st.a_max_particle, st.step, "adaptive_dt");
+        }
         m_ring->restore(m_world, m_rollback_steps);
         StepState& r = m_world.step;
         r.step = discarded.step + 1;

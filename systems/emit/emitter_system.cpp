@@ -8,6 +8,7 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <limits>
 
 #include "engine/components.hpp"
 #include "engine/world.hpp"
@@ -24,8 +25,14 @@ void EmitterSystem::run(World& w) {
     const double t = w.step.t, dt = w.step.dt;
     const Real r0 = w.physics.spacing, min_d2 = Real(0.95 * 0.95) * r0 * r0;
     const auto xb = w.boundary.store.get(comp::position);
+    // `rate` and `max_particles` are per scale 1: `scale` multiplies the particle count, so it
+    // multiplies both (the same volume of fluid flows in).
+    const double scale = w.scene.simulation.scale;
     for (std::size_t e = 0; e < emitters.size(); ++e) {
-        const EmitterDesc& em = emitters[e];
+        EmitterDesc em = emitters[e];
+        em.rate *= scale;
+        if (em.max_particles != std::numeric_limits<std::uint64_t>::max())
+            em.max_particles = std::max<std::uint64_t>(1, std::uint64_t(std::llround(double(em.max_particles) * scale)));
         if (t + dt <= em.start || t >= em.end || w.emitters.emitted[e] >= em.max_particles) continue;
         const double active = std::min(t + dt, em.end) - std::max(t, em.start);
         w.emitters.budget[e] = std::min(w.emitters.budget[e] + em.rate * active, 1e7);
