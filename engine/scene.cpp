@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <limits>
 #include <memory>
 #include <numbers>
@@ -79,6 +80,12 @@ const char* to_string(BoundaryShape s) {
             return "box";
         case BoundaryShape::Sphere:
             return "sphere";
+        case BoundaryShape::Cylinder:
+            return "cylinder";
+        case BoundaryShape::Heightfield:
+            return "heightfield";
+        case BoundaryShape::Mesh:
+            return "mesh";
     }
     return "unknown";
 }
@@ -104,6 +111,7 @@ BoundaryDesc translated(const BoundaryDesc& b, const Vec3d& d) {
     out.box.min += d;
     out.box.max += d;
     out.center += d;
+    for (auto& v : out.vertices) v += d;
     return out;
 }
 
@@ -111,6 +119,31 @@ bool has_moving_boundaries(const Scene& scene) {
     return std::any_of(scene.boundaries.begin(), scene.boundaries.end(),
                        [](const BoundaryDesc& b) { return b.motion.has_value(); });
 }
+
+namespace {
+// Two triangles per cell, front (counter-clockwise) side up: the fluid is above a heightfield.
+void heightfield_triangles(const Aabb& span, BoundaryDesc& b) {
+    const int nz = int(b.heights.size()), nx = int(b.heights[0].size());
+    b.vertices.clear();
+    b.triangles.clear();
+    for (int k = 0; k < nz; ++k)
+        for (int i = 0; i < nx; ++i)
+            b.vertices.emplace_back(span.min.x() + (span.max.x() - span.min.x()) * i / (nx - 1), b.heights[k][i],
+                                    span.min.z() + (span.max.z() - span.min.z()) * k / (nz - 1));
+    auto id = [nx](int i, int k) { return k * nx + i; };
+    for (int k = 0; k + 1 < nz; ++k)
+        for (int i = 0; i + 1 < nx; ++i) {
+            // (x, z) -> (x, z+1) -> (x+1, z): normal (dz x dx) points up (+y).
+            b.triangles.push_back({id(i, k), id(i, k + 1), id(i + 1, k)});
+            b.triangles.push_back({id(i + 1, k), id(i, k + 1), id(i + 1, k + 1)});
+        }
+    b.box = Aabb{Vec3d::Constant(std::numeric_limits<double>::max()), Vec3d::Constant(std::numeric_limits<double>::lowest())};
+    for (const auto& v : b.vertices) {
+        b.box.min = b.box.min.cwiseMin(v);
+        b.box.max = b.box.max.cwiseMax(v);
+    }
+}
+}  // namespace
 
 double Scene::particle_radius() const {
     return fluid.particle_radius / std::cbrt(simulation.scale);
@@ -120,9 +153,11 @@ namespace {
 
 // ---- Vocabulary: keys per section (in the order they are listed in messages) and names. ----
 
-constexpr std::array<const char*, 10> k_top_keys{"name",  "description",  "simulation", "domain",
+constexpr std::array<const char*, 11> k_top_keys{"name",  "description",  "simulation", "domain",
                                                  "fluid", "fluid_blocks", "boundaries", "output",
-                                                 "pcisph", "boundary"};
+                                                 "pcisph", "boundary", "emitters"};
+constexpr std::array<const char*, 7> k_emitter_keys{"position", "velocity", "radius", "rate", "start", "end",
+                                                    "max_particles"};
 constexpr std::array<const char*, 6> k_pcisph_keys{"iterations", "max_iterations", "loop",
                                                    "eta",        "eta_max",        "delta_shock"};
 constexpr std::array<const char*, 2> k_boundary_params_keys{"handling", "friction"};
@@ -137,6 +172,9 @@ constexpr std::array<const char*, 2> k_box_keys{"min", "max"};
 constexpr std::array<const char*, 4> k_block_keys{"min", "max", "velocity", "hydrostatic"};
 constexpr std::array<const char*, 4> k_boxlike_boundary_keys{"type", "min", "max", "motion"};
 constexpr std::array<const char*, 4> k_sphere_boundary_keys{"type", "center", "radius", "motion"};
+constexpr std::array<const char*, 6> k_cylinder_boundary_keys{"type", "center", "axis", "radius", "height", "motion"};
+constexpr std::array<const char*, 4> k_heightfield_boundary_keys{"type", "min", "max", "heights"};
+constexpr std::array<const char*, 4> k_mesh_boundary_keys{"type", "file", "scale", "translate"};
 constexpr std::array<const char*, 2> k_linear_motion_keys{"type", "velocity"};
 constexpr std::array<const char*, 5> k_sinusoidal_motion_keys{"type", "axis", "amplitude", "period",
                                                               "phase"};
@@ -154,8 +192,9 @@ constexpr std::array<SteppingMode, 4> k_modes{SteppingMode::Constant, SteppingMo
 constexpr std::array<PcisphLoop, 2> k_loops{PcisphLoop::Fixed, PcisphLoop::UntilConverged};
 constexpr std::array<BoundaryHandling, 2> k_handlings{BoundaryHandling::Ihmsen,
                                                       BoundaryHandling::DirectForcing};
-constexpr std::array<BoundaryShape, 3> k_shapes{BoundaryShape::Container, BoundaryShape::Box,
-                                                BoundaryShape::Sphere};
+constexpr std::array<BoundaryShape, 6> k_shapes{BoundaryShape::Container, BoundaryShape::Box,
+                                                BoundaryShape::Sphere,    BoundaryShape::Cylinder,
+                                                BoundaryShape::Heightfield, BoundaryShape::Mesh};
 constexpr std::array<MotionType, 4> k_motion_types{MotionType::Linear, MotionType::Sinusoidal,
                                                   MotionType::Path, MotionType::Circle};
 constexpr std::array<FrameFormat, 3> k_formats{FrameFormat::Vtu, FrameFormat::Bgeo,
@@ -724,6 +763,14 @@ class Reader {
                         {child("", key), "/simulation/method"});
             }
         }
+        if (const json* v = root.find("emitters")) {
+            const Node n = root.at(*v, "emitters");
+            require_array(n, "an array of emitters");
+            if (!pcisph && !v->empty())
+                fail_at(n.path, dump(*v), "no emitters: they are implemented for method \"pcisph\"",
+                        {n.path, "/simulation/method"});
+            for (std::size_t i = 0; i < v->size(); ++i) s.emitters.push_back(read_emitter({(*v)[i], child(n.path, i)}));
+        }
         if (const json* v = root.find("pcisph")) read_pcisph(root.at(*v, "pcisph"), s.pcisph);
         if (const json* v = root.find("boundary")) read_boundary_params(root.at(*v, "boundary"), s.boundary);
         if (s.fluid.surface_tension > 0 && !pcisph) {
@@ -960,6 +1007,33 @@ class Reader {
         }
     }
 
+    EmitterDesc read_emitter(const Node& n) const {
+        require_object(n, "an object with position, velocity, radius and rate");
+        check_keys(n, k_emitter_keys);
+        EmitterDesc e;
+        e.position = required_vec3(n, "position", "metres");
+        e.velocity = required_vec3(n, "velocity", "m/s");
+        if (!(e.velocity.norm() > 0)) {
+            const std::string vp = child(n.path, "velocity");
+            fail(vp, dump_at(vp), "an array of 3 numbers, not all zero (m/s; its direction is the disc's normal)");
+        }
+        e.radius = required_number(n, "radius", positive("metres"));
+        e.rate = required_number(n, "rate", positive("particles per second"));
+        read_number(n, "start", non_negative("seconds"), e.start);
+        if (const json* v = n.find("end")) {
+            const Node en = n.at(*v, "end");
+            e.end = number(en, positive("seconds"));
+            if (!(e.end > e.start)) fail_at(en.path, dump(*v), "a time after start = " + fmt_num(e.start) + " (seconds)", {en.path, child(n.path, "start")});
+        }
+        if (const json* v = n.find("max_particles")) {
+            if (!v->is_number_integer() || (!v->is_number_unsigned() && v->get<std::int64_t>() < 1) ||
+                (v->is_number_unsigned() && v->get<std::uint64_t>() < 1))
+                fail(child(n.path, "max_particles"), dump(*v), "an integer >= 1");
+            e.max_particles = v->get<std::uint64_t>();
+        }
+        return e;
+    }
+
     void read_boundary_params(const Node& n, BoundaryParams& p) const {
         require_object(n, "an object");
         check_keys(n, k_boundary_params_keys);
@@ -1025,6 +1099,61 @@ class Reader {
             const json* r = n.find("radius");
             if (!r) fail(child(n.path, "radius"), "nothing", positive("metres").describe());
             b.radius = number(n.at(*r, "radius"), positive("metres"));
+        } else if (b.shape == BoundaryShape::Cylinder) {
+            check_keys(n, k_cylinder_boundary_keys, context);
+            b.center = required_vec3(n, "center", "metres");
+            b.axis = direction(n, "axis");
+            b.radius = required_number(n, "radius", positive("metres"));
+            b.height = required_number(n, "height", positive("metres"));
+            const Vec3d top = b.center + b.height * b.axis;
+            Vec3d ext;
+            for (int a = 0; a < 3; ++a) ext[a] = b.radius * std::sqrt(std::max(0.0, 1.0 - b.axis[a] * b.axis[a]));
+            b.box = Aabb{b.center.cwiseMin(top) - ext, b.center.cwiseMax(top) + ext};
+        } else if (b.shape == BoundaryShape::Heightfield) {
+            check_keys(n, k_heightfield_boundary_keys, context);
+            const Aabb span = read_box(n);
+            const char* what = "an array of at least 2 rows (along z), each an array of the same number (>= 2) of "
+                               "heights (metres, along x)";
+            const json* hv = n.find("heights");
+            if (!hv) fail(child(n.path, "heights"), "nothing", what);
+            const Node hn = n.at(*hv, "heights");
+            if (!hv->is_array() || hv->size() < 2) fail(hn.path, dump(*hv), what);
+            for (std::size_t k = 0; k < hv->size(); ++k) {
+                const Node row{(*hv)[k], child(hn.path, k)};
+                if (!row.value.is_array() || row.value.size() < 2 ||
+                    (k > 0 && row.value.size() != b.heights[0].size()))
+                    fail(row.path, dump(row.value), what);
+                std::vector<double> r;
+                for (std::size_t i = 0; i < row.value.size(); ++i)
+                    r.push_back(number({row.value[i], child(row.path, i)}, any_number("metres")));
+                b.heights.push_back(std::move(r));
+            }
+            heightfield_triangles(span, b);
+        } else if (b.shape == BoundaryShape::Mesh) {
+            check_keys(n, k_mesh_boundary_keys, context);
+            const json* f = n.find("file");
+            const char* what = "a path to a Wavefront OBJ file (relative to the scene file)";
+            if (!f) fail(child(n.path, "file"), "nothing", what);
+            if (!f->is_string() || f->get<std::string>().empty()) fail(child(n.path, "file"), dump(*f), what);
+            std::filesystem::path path = f->get<std::string>();
+            if (path.is_relative()) path = std::filesystem::path(m_file).parent_path() / path;
+            double scale = 1.0;
+            read_number(n, "scale", positive("factor applied to the OBJ coordinates"), scale);
+            Vec3d translate = Vec3d::Zero();
+            if (const json* t = n.find("translate")) translate = vec3(n.at(*t, "translate"), "metres");
+            if (!std::filesystem::is_regular_file(path))
+                fail(child(n.path, "file"), dump(*f), std::string(what) + "; there is no such file in the scene file's folder");
+            b.file = path;
+            read_obj(path, b.vertices, b.triangles);
+            if (b.triangles.empty())
+                fail(child(n.path, "file"), dump(*f), std::string(what) + " with at least one face (f line)");
+            for (auto& v : b.vertices) v = scale * v + translate;
+            b.box = Aabb{Vec3d::Constant(std::numeric_limits<double>::max()),
+                         Vec3d::Constant(std::numeric_limits<double>::lowest())};
+            for (const auto& v : b.vertices) {
+                b.box.min = b.box.min.cwiseMin(v);
+                b.box.max = b.box.max.cwiseMax(v);
+            }
         } else {
             check_keys(n, k_boxlike_boundary_keys, context);
             b.box = read_box(n);
@@ -1170,9 +1299,9 @@ class Reader {
 
     // -- Checks across sections, on the parsed values.
     void cross_check(const Scene& s) const {
-        if (s.fluid_blocks.empty()) {
+        if (s.fluid_blocks.empty() && s.emitters.empty()) {
             fail("/fluid_blocks", dump_at("/fluid_blocks"),
-                 "at least one fluid block (there are no emitters yet, so the scene would "
+                 "at least one fluid block or emitter (otherwise the scene would "
                  "simulate nothing)");
         }
         const double spacing = 2.0 * s.particle_radius();
@@ -1327,6 +1456,67 @@ std::pair<std::string, nlohmann::json> parse_override(const std::string& assignm
         throw InputError("--set " + in_quotes(assignment) + ": the number overflows a double");
     }
     return {pointer, value};
+}
+
+void read_obj(const std::filesystem::path& file, std::vector<Vec3d>& vertices, std::vector<std::array<int, 3>>& triangles) {
+    std::FILE* f = std::fopen(file.string().c_str(), "rb");
+    if (!f) throw InputError(file.string() + ": cannot open OBJ file");
+    std::string text;
+    std::array<char, 1 << 16> buf{};
+    std::size_t got = 0;
+    while ((got = std::fread(buf.data(), 1, buf.size(), f)) > 0) text.append(buf.data(), got);
+    std::fclose(f);
+    vertices.clear();
+    triangles.clear();
+    std::size_t line_no = 0, pos = 0;
+    while (pos < text.size()) {
+        std::size_t end = text.find('\n', pos);
+        if (end == std::string::npos) end = text.size();
+        std::string line = text.substr(pos, end - pos);
+        pos = end + 1;
+        ++line_no;
+        if (!line.empty() && line.back() == '\r') line.pop_back();
+        const auto bad = [&](const std::string& why) {
+            return InputError(file.string() + ":" + std::to_string(line_no) + ": " + why + " in \"" + truncate(line, 60) + "\"");
+        };
+        std::size_t p = line.find_first_not_of(" \t");
+        if (p == std::string::npos || line[p] == '#') continue;
+        const std::size_t q = line.find_first_of(" \t", p);
+        const std::string word = line.substr(p, q == std::string::npos ? std::string::npos : q - p);
+        std::vector<std::string> args;
+        for (std::size_t a = q; a != std::string::npos && a < line.size();) {
+            const std::size_t b0 = line.find_first_not_of(" \t", a);
+            if (b0 == std::string::npos) break;
+            const std::size_t b1 = line.find_first_of(" \t", b0);
+            args.push_back(line.substr(b0, b1 == std::string::npos ? std::string::npos : b1 - b0));
+            a = b1;
+        }
+        if (word == "v") {
+            if (args.size() < 3) throw bad("a vertex needs 3 coordinates");
+            Vec3d v;
+            for (int c = 0; c < 3; ++c) {
+                char* e = nullptr;
+                v[c] = std::strtod(args[c].c_str(), &e);
+                if (e == args[c].c_str() || *e != '\0' || !std::isfinite(v[c])) throw bad("invalid number \"" + args[c] + "\"");
+            }
+            vertices.push_back(v);
+        } else if (word == "f") {
+            if (args.size() < 3) throw bad("a face needs at least 3 vertices");
+            std::vector<int> idx;
+            for (const auto& a : args) {
+                const std::string first = a.substr(0, a.find('/'));
+                char* e = nullptr;
+                const long k = std::strtol(first.c_str(), &e, 10);
+                if (e == first.c_str() || *e != '\0' || k == 0) throw bad("invalid vertex reference \"" + a + "\"");
+                const long resolved = k > 0 ? k - 1 : long(vertices.size()) + k;  // negative: relative
+                if (resolved < 0 || resolved >= long(vertices.size()))
+                    throw bad("vertex " + std::to_string(k) + " is not defined before this face (" +
+                              std::to_string(vertices.size()) + " so far)");
+                idx.push_back(int(resolved));
+            }
+            for (std::size_t t = 1; t + 1 < idx.size(); ++t) triangles.push_back({idx[0], idx[t], idx[t + 1]});
+        }
+    }
 }
 
 }  // namespace sph

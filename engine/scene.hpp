@@ -2,7 +2,10 @@
 /// @file scene.hpp
 /// @brief A validated scene: what to simulate, how, and what to write. Loaded from strict JSON
 /// (see scenes/README.md for the format, with units) or built in code.
+#include <array>
+#include <cstdint>
 #include <filesystem>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -103,7 +106,7 @@ struct FluidBlock {
     bool hydrostatic = true;
 };
 
-enum class BoundaryShape { Container, Box, Sphere };
+enum class BoundaryShape { Container, Box, Sphere, Cylinder, Heightfield, Mesh };
 const char* to_string(BoundaryShape s);
 
 /// @brief A rigid boundary sampled with particles (Akinci et al. 2012).
@@ -114,15 +117,44 @@ const char* to_string(BoundaryShape s);
 struct BoundaryDesc {
     BoundaryShape shape = BoundaryShape::Container;
     Aabb box;                 ///< container, box
-    Vec3d center{0, 0, 0};    ///< sphere
-    double radius = 0.0;      ///< sphere, m
+    Vec3d center{0, 0, 0};    ///< sphere; cylinder: centre of its base
+    double radius = 0.0;      ///< sphere, cylinder, m
+    Vec3d axis{0, 1, 0};      ///< cylinder: unit axis from the base
+    double height = 0.0;      ///< cylinder, m
+    /// heightfield and mesh: the surface as triangles, the front (counter-clockwise) side
+    /// facing the fluid; `box` is their bounding box. Heightfield: heights[k][i] is the surface
+    /// height y at x = min.x + i (max.x - min.x)/(columns - 1), z likewise along rows k.
+    std::vector<Vec3d> vertices;
+    std::vector<std::array<int, 3>> triangles;
+    std::vector<std::vector<double>> heights;  ///< heightfield
+    std::filesystem::path file;                ///< mesh: the OBJ file (resolved)
     std::optional<Motion> motion;  ///< none: static
 };
+
+/// @brief Reads the triangles of a Wavefront OBJ file (`v` and `f` lines; polygons are fanned
+/// into triangles; `vt`/`vn` references and other statements are ignored). Throws InputError
+/// naming the file and line of a malformed statement.
+void read_obj(const std::filesystem::path& file, std::vector<Vec3d>& vertices, std::vector<std::array<int, 3>>& triangles);
 
 /// @brief The point a circle motion carries round its circle: the centre of the box or sphere.
 Vec3d reference_point(const BoundaryDesc& b);
 /// @brief The same boundary moved by `d` metres (its motion is kept).
 BoundaryDesc translated(const BoundaryDesc& b, const Vec3d& d);
+
+/// @brief A disc that emits fluid particles (method "pcisph"): candidates on a square lattice of
+/// spacing 2 r over the disc through `position`, normal to `velocity`. A candidate is inserted
+/// only when no fluid particle and no boundary particle is closer than 0.95 x 2 r, and only
+/// while the emitter's budget (rate x elapsed time) allows: a particle is never placed inside
+/// another or inside a boundary.
+struct EmitterDesc {
+    Vec3d position{0, 0, 0};  ///< m, centre of the disc
+    Vec3d velocity{0, -1, 0}; ///< m/s, of the emitted particles; its direction is the disc's normal
+    double radius = 0.05;     ///< m
+    double rate = 1000;       ///< particles per second, at most
+    double start = 0;         ///< s
+    double end = std::numeric_limits<double>::infinity();  ///< s
+    std::uint64_t max_particles = std::numeric_limits<std::uint64_t>::max();  ///< this emitter's total
+};
 
 /// @brief Particle frame formats: VTK .vtu (ParaView), Houdini classic .bgeo (partio),
 /// binary .ply (Blender).
@@ -160,6 +192,7 @@ struct Scene {
     FluidParams fluid;
     std::vector<FluidBlock> fluid_blocks;
     std::vector<BoundaryDesc> boundaries;
+    std::vector<EmitterDesc> emitters;
     OutputParams output;
     PcisphParams pcisph;      ///< method "pcisph" only
     BoundaryParams boundary;  ///< method "pcisph" only

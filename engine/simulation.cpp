@@ -50,6 +50,10 @@ Aabb default_domain(const Scene& scene, double h) {
         grow(f.box.min);
         grow(f.box.max);
     }
+    for (const auto& e : scene.emitters) {
+        grow(e.position - Vec3d::Constant(e.radius));
+        grow(e.position + Vec3d::Constant(e.radius));
+    }
     if (box.min[0] > box.max[0]) box = Aabb{Vec3d::Zero(), Vec3d::Constant(1.0)};
     box.min -= Vec3d::Constant(h);
     box.max += Vec3d::Constant(h);
@@ -156,6 +160,11 @@ void initialise_world(World& w, const Scene& scene) {
         top = std::max(top, xs[i].dot(up));
         vmax0 = std::max(vmax0, vs[i].norm());
     }
+    // Emitted fluid enters at the emitter's height with its speed.
+    for (const auto& e : scene.emitters) {
+        top = std::max(top, e.position.dot(up));
+        vmax0 = std::max(vmax0, e.velocity.norm());
+    }
     double bottom = std::numeric_limits<double>::max();
     for (int c = 0; c < 8; ++c) {
         const Vec3d corner((c & 1) ? w.domain.max[0] : w.domain.min[0], (c & 2) ? w.domain.max[1] : w.domain.min[1],
@@ -166,7 +175,7 @@ void initialise_world(World& w, const Scene& scene) {
         bottom = std::numeric_limits<double>::max();
         for (const auto& p : bx) bottom = std::min(bottom, p.dot(up));
     }
-    ph.fluid_height = xs.empty() ? 0.0 : std::max(0.0, top - bottom);
+    ph.fluid_height = (xs.empty() && scene.emitters.empty()) ? 0.0 : std::max(0.0, top - bottom);
     double vref = std::max(std::sqrt(2.0 * g * ph.fluid_height), vmax0);
     if (vref <= 0) vref = 1.0;  // nothing moves and nothing falls: any stiffness is stable
     ph.speed_of_sound = Real(scene.fluid.speed_of_sound ? *scene.fluid.speed_of_sound
@@ -234,6 +243,10 @@ void initialise_world(World& w, const Scene& scene) {
         bs.permute(perm);
         w.boundary_grid.build(bs.get(comp::position));
     }
+    w.emitters = EmitterState{};
+    w.emitters.budget.assign(scene.emitters.size(), 0.0);
+    w.emitters.emitted.assign(scene.emitters.size(), 0);
+    w.emitters.next_id = std::uint32_t(xs.size());
     w.step = StepState{};
     w.step.set_dt(scene.simulation.stepping.dt);
 }
@@ -337,6 +350,14 @@ void Simulation::step() {
         // discarded step survive the restore.
         const double resume_dt = m_world.pcisph.rollback_dt;
         const StepState discarded = st;
+        if (!(resume_dt >= m_world.scene.simulation.stepping.dt_min)) {
+            std::ostringstream os;
+            os << "shock at step " << st.step << " (t = " << st.t << " s): the step to resume with, " << resume_dt
+               << " s (Ihmsen eq. 24), is below dt_min = " << m_world.scene.simulation.stepping.dt_min
+               << " s; v_max = " << st.v_max << " m/s, F_max = " << st.a_max << " m/s^2 at particle "
+               << st.a_max_particle;
+            throw SimulationError(os.str(), st.a_max_particle, st.step, "adaptive_dt");
+        }
         m_ring->restore(m_world, m_rollback_steps);
         StepState& r = m_world.step;
         r.step = discarded.step + 1;

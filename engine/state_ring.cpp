@@ -11,6 +11,7 @@ void StateRing::save(const World& w) {
     w.boundary.store.save(s.boundary);
     s.step = w.step;
     s.pcisph = w.pcisph;
+    s.emitters = w.emitters;
     m_next = (m_next + 1) % m_slots.size();
     m_count = std::min(m_count + 1, m_slots.size());
 }
@@ -25,6 +26,7 @@ std::size_t StateRing::restore(World& w, std::size_t back) {
     w.boundary.store.restore(s.boundary);
     w.step = s.step;
     w.pcisph = s.pcisph;
+    w.emitters = s.emitters;
     // The restored state is where the run resumes: the next step saves it again into the
     // same slot, so it and every newer state are dropped here.
     m_next = index;

@@ -30,6 +30,7 @@ private:
         ComponentStore::Snapshot fluid, boundary;
         StepState step;
         PcisphState pcisph;
+        EmitterState emitters;
     };
     std::vector<Slot> m_slots;
     std::size_t m_next = 0;   ///< slot the next save writes

@@ -34,6 +34,7 @@ inline const std::string boundary_active = "boundary.active_set";          ///< 
 inline const std::string pcisph_delta = "pcisph.delta";                    ///< delta of eq. 4-5
 inline const std::string pcisph_errors = "pcisph.errors";                  ///< predicted rho_err of the last pass
 inline const std::string pcisph_controller = "pcisph.controller";          ///< next dt, shock request
+inline const std::string fluid_count = "fluid.count";                      ///< the number of fluid particles (emitters)
 }  // namespace res
 
 /// @brief Constants derived from the scene once (SI units).
@@ -123,6 +124,13 @@ struct PcisphState {
     int reason = 0;          ///< adaptive controller's last decision (see AdaptiveDecision)
 };
 
+/// @brief Emitters' progress (one entry per scene emitter); saved and restored with the state.
+struct EmitterState {
+    std::vector<double> budget;          ///< particles owed (rate x elapsed time - emitted)
+    std::vector<std::uint64_t> emitted;  ///< particles inserted so far
+    std::uint32_t next_id = 0;           ///< id of the next inserted particle
+};
+
 /// @brief Boundary particles with at least one fluid neighbour (Ihmsen 2010 sec. 3.4: only
 /// those are active) and their fluid neighbours, as compressed rows over the active set.
 struct BoundaryActive {
@@ -171,6 +179,7 @@ struct World {
     StepState step;
     PcisphState pcisph;
     BoundaryActive boundary_active;
+    EmitterState emitters;
 };
 
 }  // namespace sph

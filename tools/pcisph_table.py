@@ -1,4 +1,4 @@
-#!/usr/bin/env python3
+#!/usr/bin/python3
 """Ihmsen et al. 2010 Table 1 for PCISPH scenes: `adaptive` and `constant` stepping side by side,
 run one after another (never in parallel) so the wall times compare.
 
@@ -28,6 +28,7 @@ ap.add_argument("--no-constant", action="store_true")
 ap.add_argument("--sph-run", default="build/tools/sph-run")
 ap.add_argument("--out", default="out/pcisph_table")
 ap.add_argument("--set", action="append", default=[], help="extra --set for both runs")
+ap.add_argument("--reuse", action="store_true", help="keep a run whose summary.json already exists in --out")
 args = ap.parse_args()
 if not pathlib.Path(args.sph_run).exists():
     sys.exit(f"{args.sph_run}: not found (build first)")
@@ -37,6 +38,9 @@ out_root.mkdir(parents=True, exist_ok=True)
 
 def run(scene, tag, sets):
     out = out_root / f"{pathlib.Path(scene).stem}_{tag}"
+    if args.reuse and (out / "summary.json").is_file():
+        print(f"reusing {out}", file=sys.stderr)
+        return out, json.loads((out / "summary.json").read_text())
     cmd = [args.sph_run, scene, "--threads", str(args.threads), "--no-frames", "-q", "--out", str(out)]
     if args.end is not None:
         cmd += ["--end", str(args.end)]

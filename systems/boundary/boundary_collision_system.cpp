@@ -70,6 +70,42 @@ bool collide(const BoundaryDesc& b, Vec3& x, Vec3& v) {
             if (vn < 0) v -= vn * n;
             return true;
         }
+        case BoundaryShape::Cylinder: {  // solid: leave through the side or the nearer cap
+            const Vec3 c = b.center.cast<Real>(), ax = b.axis.cast<Real>();
+            const Vec3 d = x - c;
+            const Real along = d.dot(ax), H = Real(b.height), R = Real(b.radius);
+            const Vec3 radial = d - along * ax;
+            const Real rr = radial.norm();
+            if (along <= 0 || along >= H || rr >= R) return false;
+            const Real to_side = R - rr, to_cap = std::min(along, H - along);
+            Vec3 n;
+            if (to_side < to_cap) {
+                n = rr > Real(0) ? Vec3(radial / rr) : Vec3::UnitX();
+                x += to_side * n;
+            } else {
+                n = along < H - along ? Vec3(-ax) : ax;
+                x += to_cap * n;
+            }
+            const Real vn = v.dot(n);
+            if (vn < 0) v -= vn * n;
+            return true;
+        }
+        case BoundaryShape::Heightfield: {  // fluid above: y >= h(x, z), bilinear
+            const auto& hs = b.heights;
+            const int nz = int(hs.size()), nx = int(hs[0].size());
+            const double fx = (double(x.x()) - b.box.min.x()) / (b.box.max.x() - b.box.min.x()) * (nx - 1);
+            const double fz = (double(x.z()) - b.box.min.z()) / (b.box.max.z() - b.box.min.z()) * (nz - 1);
+            if (fx < 0 || fz < 0 || fx > nx - 1 || fz > nz - 1) return false;
+            const int i = std::min(int(fx), nx - 2), k = std::min(int(fz), nz - 2);
+            const double tx = fx - i, tz = fz - k;
+            const double y = (1 - tz) * ((1 - tx) * hs[k][i] + tx * hs[k][i + 1]) + tz * ((1 - tx) * hs[k + 1][i] + tx * hs[k + 1][i + 1]);
+            if (double(x.y()) >= y) return false;
+            x.y() = Real(y);
+            v.y() = std::max(v.y(), Real(0));
+            return true;
+        }
+        case BoundaryShape::Mesh:
+            return false;  // no analytic surface: the particle boundary alone (see README)
     }
     return false;
 }

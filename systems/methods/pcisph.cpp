@@ -12,6 +12,7 @@
 #include "systems/boundary/boundary_motion_system.hpp"
 #include "systems/boundary/boundary_volume_system.hpp"
 #include "systems/boundary/pcisph_boundary_systems.hpp"
+#include "systems/emit/emitter_system.hpp"
 #include "systems/forces/nonpressure_forces_system.hpp"
 #include "systems/metrics/step_stats_system.hpp"
 #include "systems/neighbours/neighbour_search_system.hpp"
@@ -34,6 +35,7 @@ Recipe make_pcisph_recipe(const Scene& scene) {
 
     if (c.moving) r.step.push_back(std::make_unique<BoundaryMotionSystem>());
     r.step.push_back(std::make_unique<PcisphStepSizeSystem>(c.adaptive));
+    if (!scene.emitters.empty()) r.step.push_back(std::make_unique<EmitterSystem>());
     r.step.push_back(std::make_unique<FluidGridSystem>());
     r.step.push_back(std::make_unique<FluidNeighbourSystem>());
     if (c.boundary) r.step.push_back(std::make_unique<BoundaryNeighbourSystem>());

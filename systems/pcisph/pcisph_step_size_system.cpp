@@ -3,6 +3,8 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_reduce.h>
 
+#include <cmath>
+
 #include "engine/components.hpp"
 #include "engine/world.hpp"
 #include "systems/pcisph/pcisph_kernels.hpp"
@@ -36,6 +38,16 @@ void PcisphStepSizeSystem::run(World& w) {
         }
         st.dt_stable = pc.pending_dt;
         st.set_dt_clipped(pc.pending_dt);
+    }
+    // The run ends exactly at its end time, but never with a sliver of a step: PCISPH corrects
+    // the whole predicted density error within one step, so its velocity change grows as
+    // 1/dt (delta ~ 1/dt^2, eq. 4-5) and a last step of a microsecond throws particles out at
+    // tens of m/s (measured in `glass`). When between one and two steps remain, both of the
+    // last two steps take half of what remains (each at least dt/2).
+    if (std::isfinite(st.t_stop)) {
+        const double full = st.dt_stable > 0 ? st.dt_stable : st.dt;  // the step before clipping
+        const double remaining = st.t_stop - st.t;
+        if (remaining > full && remaining < 2.0 * full) st.set_dt(0.5 * remaining);
     }
     if (st.dt != pc.delta_dt) {
         if (m_prototype_sum == 0) m_prototype_sum = pcisph_prototype_sum(w.kernel, w.physics.spacing);

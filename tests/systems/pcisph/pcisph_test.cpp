@@ -8,6 +8,7 @@
 #include <numbers>
 
 #include "engine/components.hpp"
+#include "engine/errors.hpp"
 #include "systems/methods/wcsph.hpp"
 #include "systems/pcisph/pcisph_kernels.hpp"
 #include "systems/timestep/adaptive_controller.hpp"
@@ -130,7 +131,6 @@ TEST(PcisphPenetration, FastSlabNeverEndsInsideTheWall) {
         s.simulation.gravity = Vec3d::Zero();
         s.simulation.stepping.dt = 0.4 * 0.04 / 20.0;
         auto sim = make_simulation(s);
-        const World& w = sim->world();
         double deepest = -1;  // largest x - wall, m (negative: short of the wall)
         std::uint64_t net = 0;
         sim->run_until(0.03, [&](const Simulation& sm) {
@@ -237,4 +237,23 @@ TEST(PcisphShock, RollbackRestoresStateBitForBitAndResumesWithEq24) {
     EXPECT_FALSE(w.step.rolled_back);
     EXPECT_EQ(w.step.dt, to_seconds(to_ticks(eq24))) << "eq. 24 gives " << eq24;
     EXPECT_LT(w.step.dt, dt_kept);
+}
+
+// A shock whose eq. 24 step is below dt_min stops the run with a SimulationError naming the
+// controller, instead of rolling back forever.
+TEST(PcisphShock, ResumeBelowDtMinStopsTheRun) {
+    Scene s = pcisph_scene(test::tank_scene(Vec3d(0.2, 0.2, 0.1), Vec3d(0.3, 0.3, 0.1)), SteppingMode::Adaptive);
+    auto sim = make_simulation(s);
+    World& w = sim->world();
+    for (int k = 0; k < 3; ++k) sim->step();
+    const double dt = w.step.dt;
+    w.scene.simulation.stepping.dt_min = 0.9 * dt;  // eq. 24 gives 0.25 h / v = 0.5 dt below
+    w.fluid.store.get(comp::velocity)[0] = Vec3(Real(0.5 * w.physics.h / dt), 0, 0);
+    try {
+        sim->step();
+        FAIL() << "no error";
+    } catch (const SimulationError& e) {
+        EXPECT_EQ(e.system(), "adaptive_dt");
+        EXPECT_NE(std::string(e.what()).find("below dt_min"), std::string::npos) << e.what();
+    }
 }
