@@ -11,7 +11,8 @@
 
 namespace sph {
 
-Recorder::Recorder(std::filesystem::path dir, const Simulation& sim) : m_dir(std::move(dir)) {
+Recorder::Recorder(std::filesystem::path dir, const Simulation& sim)
+    : m_dir(std::move(dir)), m_probes(sim.world().scene.probes) {
     std::filesystem::create_directories(m_dir);
     std::ostringstream h;
     h << "step,t,dt,updated,neighbours_per_particle,rho_err_avg,rho_err_max,v_max,a_max,collisions,"
@@ -24,6 +25,7 @@ Recorder::Recorder(std::filesystem::path dir, const Simulation& sim) : m_dir(std
 }
 
 void Recorder::begin(const Simulation& sim) {
+    m_probes.sample_due(sim.world());
     if (sim.world().scene.simulation.frame_rate > 0) write_frame(sim);
 }
 
@@ -59,11 +61,15 @@ void Recorder::after_step(const Simulation& sim) {
     m_dt_max = std::max(m_dt_max, dt_taken);
     m_rho_err_max = std::max(m_rho_err_max, s.rho_err_max);
     ++m_steps;
+    m_probes.sample_due(w);
     const double rate = w.scene.simulation.frame_rate;
     if (rate > 0 && s.t >= m_next_frame_time - 1e-9) write_frame(sim);
 }
 
-void Recorder::flush_stats() { write_file_atomic(m_dir / "stats.csv", m_csv); }
+void Recorder::flush_stats() {
+    write_file_atomic(m_dir / "stats.csv", m_csv);
+    m_probes.write(m_dir);
+}
 
 nlohmann::json Recorder::finish(const Simulation& sim, double wall_seconds, int threads) {
     flush_stats();

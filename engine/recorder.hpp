@@ -1,7 +1,7 @@
 #pragma once
 /// @file recorder.hpp
 /// @brief Writes a run's outputs into one directory: stats.csv (a row per step), VTU frames at
-/// the scene's frame rate, and summary.json at the end. Files are written atomically; the CSV
+/// the scene's frame rate, probe series (probes/<name>.csv) and summary.json at the end. Files are written atomically; the CSV
 /// is rewritten whole at each frame boundary, so a killed run leaves a complete prefix.
 #include <chrono>
 #include <filesystem>
@@ -9,6 +9,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "engine/probes.hpp"
 #include "engine/simulation.hpp"
 
 namespace sph {
@@ -31,6 +32,7 @@ private:
     void flush_stats();
 
     std::filesystem::path m_dir;
+    ProbeSet m_probes;  ///< the scene's probes, written to probes/<name>.csv with stats.csv
     std::string m_csv;
     std::size_t m_frame = 0;
     std::uint64_t m_collisions = 0;

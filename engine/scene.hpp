@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "engine/motion.hpp"
+#include "engine/probe_desc.hpp"
 #include "engine/types.hpp"
 
 namespace sph {
@@ -30,6 +31,10 @@ enum class SteppingMode { Constant, Global, Individual };
 /// @brief Names as written in scene files and on the command line.
 const char* to_string(Method m);
 const char* to_string(SteppingMode m);
+/// @brief Every method and every stepping mode the loader knows, by name (sph-run --list-modes;
+/// the study tool runs each pair a scene accepts, so a new mode joins it with no new code).
+std::vector<std::string> method_names();
+std::vector<std::string> stepping_mode_names();
 
 /// @brief Time-step control (He et al. eq. 6-8 for `global`; eq. 9 and Alg. 2 for
 /// `individual`, whose defaults are lambda_v 0.05, lambda_f 0.025 and no acoustic condition).
@@ -60,6 +65,9 @@ struct FluidParams {
     double viscosity = 0.1;           ///< Monaghan artificial viscosity alpha (dimensionless).
     std::optional<double> speed_of_sound;  ///< m/s; default from density_fluctuation.
     double density_fluctuation = 0.01;     ///< target |rho/rho0 - 1| for the default c_s.
+    /// Monaghan alpha between fluid and boundary particles (default: `viscosity`); 0 makes every
+    /// wall free-slip (it then exerts only its Akinci pressure force, normal to it).
+    std::optional<double> boundary_viscosity;
 };
 
 /// @brief A block of fluid particles on a cubic lattice of spacing 2 r, filling [min, max].
@@ -125,6 +133,7 @@ struct Scene {
     std::vector<FluidBlock> fluid_blocks;
     std::vector<BoundaryDesc> boundaries;
     OutputParams output;
+    std::vector<ProbeDesc> probes;  ///< measurements written as CSV series (engine/probes.hpp)
 
     /// @brief Particle radius after `scale`.
     double particle_radius() const;

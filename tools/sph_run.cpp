@@ -35,7 +35,7 @@ int main(int argc, char** argv) {
     double end_time = -1, dt = -1, scale = -1;
     int threads = 0;
     std::vector<std::string> sets;
-    bool quiet = false, no_frames = false;
+    bool quiet = false, no_frames = false, list_modes = false;
     app.add_option("scene", scene_file, "Scene file (JSON)")->required();
     app.add_option("--mode", mode, "Stepping mode: constant | global | individual");
     app.add_option("--end", end_time, "Simulated end time in seconds (overrides simulation.end_time)");
@@ -47,6 +47,8 @@ int main(int argc, char** argv) {
     app.add_option("--set", sets, "Override a scene value: --set simulation.stepping.lambda_v=0.1 (repeatable)");
     app.add_flag("--no-frames", no_frames, "Write no particle frames");
     app.add_flag("-q,--quiet", quiet, "Log warnings and errors only");
+    app.add_flag("--list-modes", list_modes,
+                 "Print every 'method mode' pair this scene loads with (one a line; sph-study runs them) and exit");
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
@@ -69,6 +71,21 @@ int main(int argc, char** argv) {
         for (const auto& [path, value] : overrides)
             spdlog::info("command line sets {} = {}", path, value.dump());
 
+        if (list_modes) {  // every pair the loader accepts for this scene (tools/sph_study.py)
+            sph::load_scene(scene_file, overrides);  // the scene itself must load
+            for (const auto& method : sph::method_names())
+                for (const auto& m : sph::stepping_mode_names()) {
+                    auto o = overrides;
+                    o.emplace_back("/simulation/method", method);
+                    o.emplace_back("/simulation/stepping/mode", m);
+                    try {
+                        sph::load_scene(scene_file, o);
+                        std::printf("%s %s\n", method.c_str(), m.c_str());
+                    } catch (const sph::SceneError&) {
+                    }
+                }
+            return 0;
+        }
         const sph::Scene scene = sph::load_scene(scene_file, overrides);
         const int nthreads = threads > 0 ? threads : tbb::info::default_concurrency();
         tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(nthreads));
