@@ -39,14 +39,15 @@ std::string Recorder::header(const Simulation& sim) const {
     return h.str();
 }
 
-Recorder::Recorder(std::filesystem::path dir, const Simulation& sim) : m_dir(std::move(dir)) {
+Recorder::Recorder(std::filesystem::path dir, const Simulation& sim)
+    : m_dir(std::move(dir)), m_probes(sim.world().scene.probes) {
     std::filesystem::create_directories(m_dir);
     m_pending = header(sim);
     m_t0 = std::chrono::steady_clock::now();
 }
 
 Recorder::Recorder(std::filesystem::path dir, const Simulation& sim, const nlohmann::json& st)
-    : m_dir(std::move(dir)) {
+    : m_dir(std::move(dir)), m_probes(sim.world().scene.probes) {
     std::filesystem::create_directories(m_dir);
     m_frame = st.at("frame").get<std::size_t>();
     m_next_frame_time = st.at("next_frame_time").get<double>();
@@ -99,6 +100,7 @@ nlohmann::json Recorder::state() {
 }
 
 void Recorder::begin(const Simulation& sim) {
+    m_probes.sample_due(sim.world());
     if (sim.world().scene.simulation.frame_rate > 0) write_frame(sim);
 }
 
@@ -142,6 +144,7 @@ void Recorder::after_step(const Simulation& sim) {
     const double end = w.scene.simulation.end_time;
     while (m_fronts.size() < 3 && s.t >= 0.25 * double(m_fronts.size() + 1) * end - 1e-9)
         m_fronts.emplace_back(s.t, front_x(w));
+    m_probes.sample_due(w);
     const double rate = w.scene.simulation.frame_rate;
     if (rate > 0 && s.t >= m_next_frame_time - 1e-9) {
         write_frame(sim);
@@ -159,6 +162,7 @@ void Recorder::flush_stats() {
     f.commit();
     m_stats_bytes += m_pending.size();
     m_pending.clear();
+    m_probes.write(m_dir);
 }
 
 nlohmann::json Recorder::finish(const Simulation& sim, double wall_seconds, int threads) {

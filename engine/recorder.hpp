@@ -1,7 +1,8 @@
 #pragma once
 /// @file recorder.hpp
 /// @brief Writes a run's outputs into one directory: stats.csv (a row per step), frames at
-/// the scene's frame rate (frames/frame_NNNNN.vtu/.bgeo/.ply), and summary.json at the end.
+/// the scene's frame rate (frames/frame_NNNNN.vtu/.bgeo/.ply), probe series (probes/<name>.csv, written with stats.csv)
+/// and summary.json at the end.
 /// Every file is replaced atomically (AtomicFile). stats.csv is committed at each frame, at
 /// each checkpoint, whenever 4 MiB of rows are pending, and at the end: the new file is the
 /// committed prefix copied from the old one plus the pending rows, so memory stays bounded
@@ -14,6 +15,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "engine/probes.hpp"
 #include "engine/simulation.hpp"
 
 namespace sph {
@@ -48,6 +50,7 @@ private:
     std::string header(const Simulation& sim) const;
 
     std::filesystem::path m_dir;
+    ProbeSet m_probes;  ///< the scene's probes, written to probes/<name>.csv with stats.csv
     std::string m_pending;           ///< rows not yet committed to stats.csv
     std::uint64_t m_stats_bytes = 0;  ///< bytes of stats.csv committed so far
     std::size_t m_frame = 0;

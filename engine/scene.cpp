@@ -153,9 +153,9 @@ namespace {
 
 // ---- Vocabulary: keys per section (in the order they are listed in messages) and names. ----
 
-constexpr std::array<const char*, 11> k_top_keys{"name",  "description",  "simulation", "domain",
+constexpr std::array<const char*, 12> k_top_keys{"name",  "description",  "simulation", "domain",
                                                  "fluid", "fluid_blocks", "boundaries", "output",
-                                                 "pcisph", "boundary", "emitters"};
+                                                 "pcisph", "boundary", "emitters", "probes"};
 constexpr std::array<const char*, 7> k_emitter_keys{"position", "velocity", "radius", "rate", "start", "end",
                                                     "max_particles"};
 constexpr std::array<const char*, 6> k_pcisph_keys{"iterations", "max_iterations", "loop",
@@ -165,9 +165,9 @@ constexpr std::array<const char*, 7> k_simulation_keys{
     "method", "stepping", "end_time", "frame_rate", "scale", "gravity", "sort_interval"};
 constexpr std::array<const char*, 8> k_stepping_keys{"mode",     "dt",       "lambda_v", "lambda_f",
                                                      "acoustic", "lambda_c", "dt_max",   "dt_min"};
-constexpr std::array<const char*, 6> k_fluid_keys{"rest_density", "particle_radius", "viscosity",
+constexpr std::array<const char*, 7> k_fluid_keys{"rest_density", "particle_radius", "viscosity",
                                                   "speed_of_sound", "density_fluctuation",
-                                                  "surface_tension"};
+                                                  "surface_tension", "boundary_viscosity"};
 constexpr std::array<const char*, 2> k_box_keys{"min", "max"};
 constexpr std::array<const char*, 4> k_block_keys{"min", "max", "velocity", "hydrostatic"};
 constexpr std::array<const char*, 4> k_boxlike_boundary_keys{"type", "min", "max", "motion"};
@@ -779,6 +779,7 @@ class Reader {
                     "\"pcisph\" only",
                     {"/fluid/surface_tension", "/simulation/method"});
         }
+        if (const json* v = root.find("probes")) s.probes = parse_probes(*v, m_file);  // engine/probes.cpp
 
         cross_check(s);
         return s;
@@ -1049,6 +1050,9 @@ class Reader {
         read_number(n, "viscosity", non_negative("artificial viscosity alpha"), p.viscosity);
         if (const json* v = n.find("speed_of_sound")) {
             p.speed_of_sound = number(n.at(*v, "speed_of_sound"), positive("m/s"));
+        }
+        if (const json* v = n.find("boundary_viscosity")) {
+            p.boundary_viscosity = number(n.at(*v, "boundary_viscosity"), non_negative("artificial viscosity alpha"));
         }
         read_number(n, "density_fluctuation", {0.0, false, 0.2, true, "fraction of rest density"},
                     p.density_fluctuation);
@@ -1380,6 +1384,18 @@ class Reader {
 };
 
 }  // namespace
+
+std::vector<std::string> method_names() {
+    std::vector<std::string> out;
+    for (const Method m : k_methods) out.emplace_back(to_string(m));
+    return out;
+}
+
+std::vector<std::string> stepping_mode_names() {
+    std::vector<std::string> out;
+    for (const SteppingMode m : k_modes) out.emplace_back(to_string(m));
+    return out;
+}
 
 Scene parse_scene(const std::string& text, const std::string& file,
                   const std::vector<std::pair<std::string, nlohmann::json>>& overrides) {

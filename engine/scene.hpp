@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "engine/motion.hpp"
+#include "engine/probe_desc.hpp"
 #include "engine/types.hpp"
 
 namespace sph {
@@ -44,6 +45,10 @@ const char* to_string(Method m);
 const char* to_string(SteppingMode m);
 const char* to_string(PcisphLoop l);
 const char* to_string(BoundaryHandling b);
+/// @brief Every method and every stepping mode the loader knows, by name (sph-run --list-modes;
+/// the study tool runs each pair a scene accepts, so a new mode joins it with no new code).
+std::vector<std::string> method_names();
+std::vector<std::string> stepping_mode_names();
 
 /// @brief Time-step control (He et al. eq. 6-8 for `global`; eq. 9 and Alg. 2 for
 /// `individual`, whose defaults are lambda_v 0.05, lambda_f 0.025 and no acoustic condition).
@@ -94,6 +99,9 @@ struct FluidParams {
     /// Becker & Teschner 2007 eq. 13 cohesion coefficient kappa (m^3/s^2):
     /// a_i = -kappa sum_j (m_j/m_i) x_ij W_ij. 0: no surface-tension system (PCISPH only).
     double surface_tension = 0.0;
+    /// Monaghan alpha between fluid and boundary particles (default: `viscosity`); 0 makes every
+    /// wall free-slip (it then exerts only its Akinci pressure force, normal to it).
+    std::optional<double> boundary_viscosity;
 };
 
 /// @brief A block of fluid particles on a cubic lattice of spacing 2 r, filling [min, max].
@@ -196,6 +204,7 @@ struct Scene {
     OutputParams output;
     PcisphParams pcisph;      ///< method "pcisph" only
     BoundaryParams boundary;  ///< method "pcisph" only
+    std::vector<ProbeDesc> probes;  ///< measurements written as CSV series (engine/probes.hpp)
 
     /// @brief Particle radius after `scale`.
     double particle_radius() const;

@@ -71,6 +71,7 @@ void initialise_world(World& w, const Scene& scene) {
     ph.h = Real(4 * r);
     ph.rest_density = Real(scene.fluid.rest_density);
     ph.viscosity = Real(scene.fluid.viscosity);
+    ph.boundary_viscosity = Real(scene.fluid.boundary_viscosity.value_or(scene.fluid.viscosity));
     ph.gravity = scene.simulation.gravity.cast<Real>();
     w.kernel = CubicSpline(ph.h);
     ph.mass = lattice_mass(w.kernel, ph.spacing, ph.rest_density);

@@ -47,6 +47,7 @@ struct Physics {
     Real speed_of_sound = 0;  ///< c_s
     Real tait_b = 0;          ///< B = rho0 c_s^2 / gamma, gamma = 7 (He eq. 2)
     Real viscosity = 0;       ///< Monaghan alpha
+    Real boundary_viscosity = 0;  ///< Monaghan alpha against boundary particles (0: free-slip walls)
     Vec3 gravity = Vec3::Zero();
     double fluid_height = 0;  ///< m, used for the default c_s
 };

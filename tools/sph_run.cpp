@@ -39,7 +39,7 @@ int main(int argc, char** argv) {
     double end_time = -1, dt = -1, scale = -1;
     int threads = 0;
     std::vector<std::string> sets;
-    bool quiet = false, no_frames = false;
+    bool quiet = false, no_frames = false, list_modes = false;
     std::string inject_nan, resume_file;
     double checkpoint_every = 0;
     app.add_option("scene", scene_file, "Scene file (JSON); not with --resume");
@@ -61,6 +61,8 @@ int main(int argc, char** argv) {
                    "Testing aid: STEP:ID puts a NaN into particle ID's acceleration in step STEP, to exercise the "
                    "failure diagnosis (exit 3)");
     app.add_flag("-q,--quiet", quiet, "Log warnings and errors only");
+    app.add_flag("--list-modes", list_modes,
+                 "Print every 'method mode' pair this scene loads with (one a line; sph-study runs them) and exit");
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
@@ -109,6 +111,22 @@ int main(int argc, char** argv) {
         }
         for (const auto& [path, value] : overrides)
             spdlog::info("command line sets {} = {}", path, value.dump());
+
+        if (list_modes) {  // every pair the loader accepts for this scene (tools/sph_study.py)
+            sph::parse_scene(scene_text, scene_file, overrides);  // the scene itself must load
+            for (const auto& method : sph::method_names())
+                for (const auto& m : sph::stepping_mode_names()) {
+                    auto o = overrides;
+                    o.emplace_back("/simulation/method", method);
+                    o.emplace_back("/simulation/stepping/mode", m);
+                    try {
+                        sph::parse_scene(scene_text, scene_file, o);
+                        std::printf("%s %s\n", method.c_str(), m.c_str());
+                    } catch (const sph::SceneError&) {
+                    }
+                }
+            return 0;
+        }
         sph::Scene scene = sph::parse_scene(scene_text, scene_file, overrides);
         scene.source = scene_file;
         const int nthreads = threads > 0 ? threads : tbb::info::default_concurrency();

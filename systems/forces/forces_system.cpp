@@ -67,6 +67,7 @@ void ForcesSystem::run(World& w) {
     const CubicSpline& kernel = w.kernel;
     const Physics& ph = w.physics;
     const Real m = ph.mass, alpha = ph.viscosity, c = ph.speed_of_sound, h = ph.h, rho0 = ph.rest_density;
+    const Real alpha_b = ph.boundary_viscosity;  // 0: free-slip walls (pressure force only)
     const Vec3 g = ph.gravity;
     std::span<Real> drho;
     std::span<double> dt_raw;
@@ -98,7 +99,7 @@ void ForcesSystem::run(World& w) {
                 const Real r2 = xib.squaredNorm();
                 const Vec3 grad = kernel.grad(xib, std::sqrt(r2));
                 const Vec3 vib = moving ? Vec3(vi - vel_b[b]) : vi;  // relative velocity v_i - v_b
-                const Real visc = alpha > 0 ? monaghan_pi(vib.dot(xib), r2, alpha, c, h, rhoi, rho0) : Real(0);
+                const Real visc = alpha_b > 0 ? monaghan_pi(vib.dot(xib), r2, alpha_b, c, h, rhoi, rho0) : Real(0);
                 a -= (rho0 * vb[b] * (Real(2) * pi + visc)) * grad;
                 if constexpr (Individual) div += rho0 * vb[b] * vib.dot(grad);  // He eq. 5, boundary term
             }

@@ -1,0 +1,182 @@
+// Probes (engine/probes.*) against states whose answer is known in closed form: a lattice
+// block at rest (height, front, colour), a uniformly moving block (kinetic energy, momentum,
+// potential energy from the block's centre of mass), a linear hydrostatic pressure field
+// (interpolated at a point and extrapolated to the floor with Adami et al. 2012 eq. 27, both
+// exact for a linear field), plus sampling rates, CSV output and scene-file errors.
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <sstream>
+
+#include "engine/components.hpp"
+#include "engine/errors.hpp"
+#include "engine/probes.hpp"
+#include "engine/recorder.hpp"
+#include "systems/methods/wcsph.hpp"
+#include "test_scenes.hpp"
+
+using namespace sph;
+
+namespace {
+
+// A 0.2 x 0.3 x 0.2 m block (r = 0.01 m: 10 x 15 x 10 particles) in a 0.4 x 0.5 x 0.2 m tank,
+// densities at rho0, no step taken.
+std::unique_ptr<Simulation> block_at_rest() {
+    Scene s = test::tank_scene({0.2, 0.3, 0.2}, {0.4, 0.5, 0.2});
+    auto sim = make_simulation(s);
+    for (auto& rho : sim->world().fluid.store.get(comp::density)) rho = sim->world().physics.rest_density;
+    return sim;
+}
+
+UniformGrid grid_of(const World& w) {
+    UniformGrid g(w.domain, w.physics.h);
+    g.build(w.fluid.store.get(comp::position));
+    return g;
+}
+
+}  // namespace
+
+// Inside a filled lattice at rest sum_j (m/rho0) W = 1 exactly: that is how the mass is chosen
+// (engine/simulation.cpp, lattice_mass). Tolerance 1e-5: float positions.
+TEST(Probes, ColourIsOneInsideALattice) {
+    auto sim = block_at_rest();
+    const auto g = grid_of(sim->world());
+    EXPECT_NEAR(colour_at(sim->world(), g, {0.11, 0.15, 0.11}), 1.0, 1e-5);
+    EXPECT_NEAR(colour_at(sim->world(), g, {0.3, 0.15, 0.1}), 0.0, 1e-12);  // dry, more than h away
+}
+
+// The 0.5 level of the colour function at a flat lattice face lies where the continuum the
+// particles stand for ends, half a spacing beyond the last centres: at y = 0.3 m (top) and
+// x = 0.2 m (side). For a continuous half-space it is exact by the kernel's symmetry; the
+// lattice's discreteness moves it by less than a tenth of a spacing (measured 0.4 mm = 0.02
+// spacings), so the tolerance is 0.1 spacing = 2 mm.
+TEST(Probes, HeightAndColourFrontFindTheBlockFaces) {
+    auto sim = block_at_rest();
+    const World& w = sim->world();
+    const auto g = grid_of(w);
+    const double spacing = 0.02;
+    const double height = iso_distance(w, g, {0.1, 0.0, 0.1}, {0.1, 0.5, 0.1});
+    EXPECT_NEAR(height, 0.3, 0.1 * spacing);
+    const double front = iso_distance(w, g, {0.0, 0.05, 0.1}, {0.4, 0.05, 0.1});
+    EXPECT_NEAR(front, 0.2, 0.1 * spacing);
+    EXPECT_EQ(iso_distance(w, g, {0.3, 0.0, 0.1}, {0.3, 0.5, 0.1}), 0.0);  // dry line
+    std::printf("probes: lattice top at %.5f m (0.3), side at %.5f m (0.2)\n", height, front);
+}
+
+// Largest x of a particle centre with >= k neighbours is the last lattice column, 0.19 m; the
+// probe reports the face of its cell, + r = 0.2 m. A lone particle thrown ahead (0 neighbours)
+// must not count. Exact up to float rounding.
+TEST(Probes, FrontByNeighboursIgnoresALoneDroplet) {
+    auto sim = block_at_rest();
+    World& w = sim->world();
+    auto x = w.fluid.store.get(comp::position);
+    x[0] = Vec3(0.35f, 0.05f, 0.1f);  // one particle far ahead
+    const auto g = grid_of(w);
+    EXPECT_NEAR(front_by_neighbours(w, g, {1, 0, 0}, 4) + w.physics.particle_radius, 0.2, 1e-6);
+    EXPECT_NEAR(front_by_neighbours(w, g, {1, 0, 0}, 0), 0.35, 1e-6);
+}
+
+// A block moving at v = (1, -2, 0.5) m/s: KE = M |v|^2 / 2, momentum M v, potential energy
+// M g y_com with y_com = 0.15 m (the block's centre), M = N m. Relative tolerance 1e-6
+// (float positions and velocities summed in double).
+TEST(Probes, FluidTotalsOfAUniformlyMovingBlock) {
+    auto sim = block_at_rest();
+    World& w = sim->world();
+    const Vec3d v(1.0, -2.0, 0.5);
+    for (auto& vi : w.fluid.store.get(comp::velocity)) vi = v.cast<Real>();
+    auto rho = w.fluid.store.get(comp::density);
+    rho[0] = Real(1.05 * w.physics.rest_density);  // one particle 5 % compressed
+    const FluidTotals t = fluid_totals(w);
+    const double n = double(w.fluid.size()), mass = n * w.physics.mass;
+    ASSERT_EQ(n, 1500);
+    EXPECT_NEAR(t.kinetic, 0.5 * mass * v.squaredNorm(), 1e-6 * t.kinetic);
+    EXPECT_NEAR((t.momentum - mass * v).norm(), 0.0, 1e-6 * mass * v.norm());
+    EXPECT_NEAR(t.potential, mass * 9.81 * 0.15, 1e-6 * t.potential);
+    EXPECT_NEAR(t.rho_err_max, 0.05, 1e-6);
+    EXPECT_NEAR(t.rho_err_avg, 0.05 / n, 1e-8);
+}
+
+// Linear hydrostatic field p = rho0 g (H - y), H = 0.3 m, set on the particles. Shepard
+// interpolation reproduces a linear field exactly at an interior point of a symmetric lattice
+// (the weighted mean of y_j is y), and Adami eq. 27 extrapolates it exactly to the wall: the
+// floor's boundary particles sit r = 0.01 m below y = 0, so they read rho0 g (H + r).
+// Tolerance 0.1 %: float positions and densities.
+TEST(Probes, PressureOfALinearHydrostaticField) {
+    auto sim = block_at_rest();
+    World& w = sim->world();
+    const double rho0 = w.physics.rest_density, g = 9.81, H = 0.3;
+    auto x = w.fluid.store.get(comp::position);
+    auto p = w.fluid.store.get(comp::pressure);
+    for (std::size_t i = 0; i < x.size(); ++i) p[i] = Real(rho0 * g * (H - x[i].y()));
+    const auto grid = grid_of(w);
+    const double expect_mid = rho0 * g * (H - 0.15);
+    EXPECT_NEAR(fluid_pressure_at(w, grid, {0.1, 0.15, 0.1}), expect_mid, 1e-3 * expect_mid);
+    int count = 0;
+    const double wall = boundary_pressure_at(w, grid, {0.1, 0.0, 0.1}, 0.025, &count);
+    const double expect_wall = rho0 * g * (H + 0.01);
+    EXPECT_NEAR(wall, expect_wall, 1e-3 * expect_wall);
+    EXPECT_GE(count, 4);
+    std::printf("probes: interpolated %.2f Pa (%.2f), wall %.2f Pa (%.2f) over %d boundary particles\n",
+                fluid_pressure_at(w, grid, {0.1, 0.15, 0.1}), expect_mid, wall, expect_wall, count);
+}
+
+// Rates: a probe at 100 Hz over 0.1 s of simulated time has 11 samples (t = 0 included), one
+// at 20 Hz has 3; the Recorder writes them as CSV with their columns.
+TEST(Probes, RatesAndCsvFromARun) {
+    const std::string text = R"({"name": "probe_rates",
+        "simulation": {"end_time": 0.1, "frame_rate": 0},
+        "fluid_blocks": [{"min": [0, 0, 0], "max": [0.2, 0.2, 0.1]}],
+        "boundaries": [{"type": "container", "min": [0, 0, 0], "max": [0.4, 0.4, 0.1]}],
+        "probes": [{"type": "fluid", "rate": 100},
+                   {"type": "front", "name": "tip", "rate": 20},
+                   {"type": "height", "from": [0.05, 0, 0.05], "to": [0.05, 0.4, 0.05], "rate": 20},
+                   {"type": "pressure", "point": [0.1, 0.05, 0.05], "rate": 20},
+                   {"type": "pressure", "source": "boundary", "point": [0.1, 0, 0.05], "rate": 20}]})";
+    const Scene scene = parse_scene(text, "probe_rates.json");
+    auto sim = make_simulation(scene);
+    const auto dir = std::filesystem::temp_directory_path() / "sph_probes_test";
+    std::filesystem::remove_all(dir);
+    Recorder rec(dir, *sim);
+    rec.begin(*sim);
+    sim->run_until(0.1, [&](const Simulation& s) { rec.after_step(s); });
+    rec.finish(*sim, 1.0, 1);
+    auto lines = [&](const char* name) {
+        std::ifstream f(dir / "probes" / name);
+        std::string line, header;
+        std::getline(f, header);
+        int n = 0;
+        while (std::getline(f, line)) ++n;
+        return std::make_pair(header, n);
+    };
+    EXPECT_EQ(lines("fluid_0.csv"), std::make_pair(std::string("t,kinetic,potential,momentum_x,momentum_y,momentum_z,"
+                                                               "rho_err_avg,rho_err_max"), 11));
+    EXPECT_EQ(lines("tip.csv"), std::make_pair(std::string("t,front,x_centre"), 3));
+    EXPECT_EQ(lines("height_2.csv").second, 3);
+    EXPECT_EQ(lines("pressure_3.csv").first, "t,p,colour");
+    EXPECT_EQ(lines("pressure_4.csv").first, "t,p,wall_particles");
+}
+
+TEST(Probes, SceneErrorsNameThePathAndWhatWasExpected) {
+    const auto load = [](const std::string& probes) {
+        const std::string text = R"({"name": "x", "fluid_blocks": [{"min": [0,0,0], "max": [0.1,0.1,0.1]}],
+            "probes": )" + probes + "}";
+        try {
+            parse_scene(text, "x.json");
+        } catch (const SceneError& e) {
+            return std::string(e.what());
+        }
+        return std::string("no error");
+    };
+    EXPECT_EQ(load(R"([{"type": "presure"}])"),
+              "x.json: /probes/0/type: found \"presure\", expected one of \"pressure\", \"height\", \"front\", \"fluid\"");
+    EXPECT_EQ(load(R"([{"type": "height", "from": [0,0,0]}])"),
+              "x.json: /probes/0/to: found nothing, expected an array of 3 numbers (metres)");
+    EXPECT_EQ(load(R"([{"type": "fluid", "rate": 0}])"),
+              "x.json: /probes/0/rate: found 0, expected a number > 0 (samples per simulated second)");
+    EXPECT_EQ(load(R"([{"type": "fluid", "point": [0,0,0]}])"),
+              "x.json: /probes/0/point: found an unknown key \"point\", expected one of \"type\", \"name\", \"rate\", "
+              "\"experiment\" for a \"fluid\" probe");
+    EXPECT_EQ(load(R"([{"type": "fluid", "name": "a"}, {"type": "fluid", "name": "a"}])"),
+              "x.json: /probes/1/name: found \"a\", expected a name no other probe has (it names probes/<name>.csv)");
+    EXPECT_EQ(load(R"({"type": "fluid"})"), "x.json: /probes: found {\"type\":\"fluid\"}, expected an array of probes");
+}

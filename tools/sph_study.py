@@ -1,0 +1,477 @@
+#!/usr/bin/python3
+"""sph-study: the speed/accuracy trade of one scene, measured.
+
+usage: sph-study SCENE.json [--config "MODE [--set KEY=VALUE ...] [--name LABEL]" ...]
+                 [--no-default-modes] [--end T] [--scale S] [--set KEY=VALUE ...] [--threads 2]
+                 [--reference DIR | --reference-dt DT] [--out out/study/<scene>] [--sph-run PATH]
+
+Runs a list of configurations of one scene with sph-run, one after another (never in
+parallel, so that wall times compare), and writes into --out:
+
+  study.md, study.csv   He et al. Table 1 / Ihmsen et al. Table 1 with accuracy columns:
+                        method and mode; particles and simulated time; wall time, steps,
+                        average/minimum/maximum dt; average active %; speed-up over `global` and
+                        over `constant`; average and maximum density error; RMS deviation from a
+                        reference run of every probe series and of the kinetic energy; error
+                        against the experiment for probes that declare one.
+  pareto.png            wall time against error, one point per configuration, the front of
+                        non-dominated configurations joined and marked.
+  dt.png                dt_sim (log) and active fraction over time of every run, overlaid
+                        (tools/plot_dt.py: He et al. Fig. 2; Ihmsen et al. Fig. 4).
+  <run>/                every run's outputs (stats.csv, summary.json, probes/, run.log).
+
+Configurations. By default every `method mode` pair the scene loads with (sph-run
+--list-modes), so a mode added to the engine joins the study with no change here; --config adds
+more (MODE is `mode` or `method/mode`; --set keys may drop the leading `simulation.`, e.g.
+`--config "individual --set stepping.lambda_v=0.1"`). A `constant` configuration without its
+own `stepping.dt` takes the smallest step an adaptive run of the same method took (the largest
+fixed step known to be stable for the whole run, as a user without adaptivity would choose it).
+
+Reference. A `constant` run of the scene's method at a small step: half the smallest step the
+`global` run took (or --reference-dt), or an earlier run given with --reference DIR.
+Deviation of a series = RMS over the reference's sample times of (run - reference), the run
+interpolated linearly in time. The "error" of the Pareto plot is the mean over the series
+(probe primary columns and kinetic energy) of that RMS divided by the reference series' range
+(max - min): a dimensionless 0..1 figure, 0 for the reference itself.
+
+Experiment. A probe with an `experiment` object (scenes/README.md) is compared as
+T = t * t_scale, Z = (value - value_offset) * value_scale against the file's first two
+columns (after '#' comment lines and a header); RMS relative error over t_range, minimised over
+one time shift |dT| <= max_shift (a lab gate does not open instantly).
+"""
+import argparse
+import csv
+import datetime
+import json
+import math
+import os
+import pathlib
+import platform
+import shlex
+import subprocess
+import sys
+import time
+
+import numpy as np
+
+TOP_KEYS = {"name", "description", "simulation", "domain", "fluid", "fluid_blocks", "boundaries", "output", "probes"}
+HERE = pathlib.Path(__file__).resolve().parent
+
+
+def fail(msg):
+    print(f"sph-study: error: {msg}", file=sys.stderr)
+    sys.exit(2)
+
+
+def full_key(key):
+    """`stepping.lambda_v` -> `simulation.stepping.lambda_v`; scene top-level keys unchanged."""
+    head = key.split(".", 1)[0].lstrip("/")
+    return key if head in TOP_KEYS else "simulation." + key
+
+
+def parse_config(spec):
+    words = shlex.split(spec)
+    if not words:
+        fail(f"--config {spec!r}: empty (expected 'MODE [--set KEY=VALUE ...] [--name LABEL]')")
+    mode, rest = words[0], words[1:]
+    method = None
+    if "/" in mode:
+        method, mode = mode.split("/", 1)
+    sets, name = [], None
+    i = 0
+    while i < len(rest):
+        if rest[i] == "--set" and i + 1 < len(rest):
+            k, eq, v = rest[i + 1].partition("=")
+            if not eq:
+                fail(f"--config {spec!r}: {rest[i + 1]!r} is not KEY=VALUE")
+            sets.append(f"{full_key(k.strip())}={v.strip()}")
+            i += 2
+        elif rest[i] == "--name" and i + 1 < len(rest):
+            name = rest[i + 1]
+            i += 2
+        else:
+            fail(f"--config {spec!r}: unexpected {rest[i]!r} (expected --set KEY=VALUE or --name LABEL)")
+    label = name or " ".join([f"{method}/{mode}" if method else mode] + [s.split("=", 1)[0].split(".")[-1] + "=" +
+                                                                          s.split("=", 1)[1] for s in sets])
+    return {"label": label, "method": method, "mode": mode, "sets": sets}
+
+
+def read_csv(path):
+    """Numeric CSV with a header; '#' lines skipped. Returns {column: np.array}."""
+    rows, header = [], None
+    with open(path) as f:
+        for line in f:
+            if not line.strip() or line.startswith("#"):
+                continue
+            cells = line.strip().split(",")
+            if header is None:
+                header = cells
+                continue
+            rows.append([float(c) for c in cells])
+    data = np.array(rows, dtype=float).reshape(-1, len(header))
+    return {h: data[:, i] for i, h in enumerate(header)}
+
+
+def machine():
+    model = platform.processor() or platform.machine()
+    try:
+        for line in open("/proc/cpuinfo"):
+            if line.startswith("model name"):
+                model = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    return f"{os.cpu_count()} cores, {model}"
+
+
+def source_commit():
+    try:
+        return subprocess.run(["git", "-C", str(HERE), "rev-parse", "--short", "HEAD"], capture_output=True,
+                              text=True, check=True).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
+
+
+class Study:
+    def __init__(self, args):
+        self.a = args
+        self.scene = pathlib.Path(args.scene)
+        if not self.scene.is_file():
+            fail(f"{self.scene}: no such scene file")
+        self.scene_json = json.loads(self.scene.read_text())
+        self.out = pathlib.Path(args.out or f"out/study/{self.scene_json.get('name', self.scene.stem)}")
+        self.common = [full_key(s) for s in args.set]
+        if args.end is not None:
+            self.common.append(f"simulation.end_time={args.end!r}")
+        if args.scale is not None:
+            self.common.append(f"simulation.scale={args.scale!r}")
+        self.common.append("simulation.frame_rate=0")  # no particle frames: timings are of the physics
+        self.probes = self.scene_json.get("probes", [])
+        self.fluid_probe = next((p.get("name", f"fluid_{i}") for i, p in enumerate(self.probes)
+                                 if p.get("type") == "fluid"), None)
+        self.scene_path = self.scene
+        if self.fluid_probe is None:  # kinetic energy is always compared: add a whole-fluid probe
+            self.scene_json.setdefault("probes", []).append({"type": "fluid", "name": "study_fluid", "rate": 100})
+            self.out.mkdir(parents=True, exist_ok=True)
+            self.scene_path = self.out / self.scene.name
+            self.scene_path.write_text(json.dumps(self.scene_json, indent=2))
+            self.fluid_probe = "study_fluid"
+            self.probes = self.scene_json["probes"]
+
+    def sph_run(self, extra, out_dir, label, index, total):
+        cmd = [self.a.sph_run, str(self.scene_path), "--threads", str(self.a.threads), "--out", str(out_dir)]
+        for s in self.common + extra:
+            cmd += ["--set", s]
+        out_dir.mkdir(parents=True, exist_ok=True)
+        print(f"[{time.strftime('%H:%M:%S')}] run {index}/{total} {label}: {shlex.join(cmd)}", flush=True)
+        t0 = time.time()
+        with open(out_dir / "run.log", "w") as log:
+            proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+            for line in proc.stdout:
+                log.write(line)
+                if " t = " in line or "error" in line or "failed" in line:
+                    print(f"    {label}: {line.split('] ', 2)[-1].strip()}", flush=True)
+            rc = proc.wait()
+        if rc != 0:
+            print(f"    {label}: FAILED (exit {rc}); see {out_dir / 'run.log'}", flush=True)
+            return None
+        s = json.loads((out_dir / "summary.json").read_text())
+        print(f"    {label}: {s['steps']} steps, {s['wall_time_s']:.1f} s wall ({time.time() - t0:.1f} s with set-up)",
+              flush=True)
+        return s
+
+    def list_modes(self):
+        proc = subprocess.run([self.a.sph_run, str(self.scene_path), "--list-modes"] +
+                              sum((["--set", s] for s in self.common), []), capture_output=True, text=True)
+        if proc.returncode != 0:
+            fail(f"sph-run --list-modes failed: {proc.stderr.strip()}")
+        return [line.split() for line in proc.stdout.splitlines() if line.strip()]
+
+    def configurations(self):
+        configs = []
+        if not self.a.no_default_modes:
+            for method, mode in self.list_modes():
+                configs.append({"label": mode if method == self.scene_method() else f"{method}/{mode}",
+                                "method": method, "mode": mode, "sets": []})
+        configs += [parse_config(c) for c in self.a.config]
+        if not configs:
+            fail("no configurations (--no-default-modes without --config)")
+        for c in configs:
+            c["method"] = c["method"] or self.scene_method()
+        return configs
+
+    def scene_method(self):
+        return self.scene_json.get("simulation", {}).get("method", "wcsph")
+
+    def run(self):
+        configs = self.configurations()
+        # Adaptive runs first: a `constant` configuration takes its step from them.
+        order = sorted(range(len(configs)), key=lambda k: configs[k]["mode"] == "constant")
+        results = [None] * len(configs)
+        total = len(configs) + (0 if self.a.reference else 1)
+        for n, k in enumerate(order, 1):
+            c = configs[k]
+            sets = [f"simulation.method={c['method']}", f"simulation.stepping.mode={c['mode']}"] + c["sets"]
+            if c["mode"] == "constant" and not any(s.startswith("simulation.stepping.dt=") for s in c["sets"]):
+                same = [r for r, cc in zip(results, configs) if r and cc["mode"] != "constant" and
+                        cc["method"] == c["method"]]
+                if same:
+                    dt = min(r["min_dt_s"] for r in same)
+                    sets.append(f"simulation.stepping.dt={dt!r}")
+                    c["note"] = f"dt = {dt * 1e3:.4g} ms, the smallest adaptive step"
+            slug = "".join(ch if ch.isalnum() or ch in "._-" else "_" for ch in c["label"])
+            results[k] = self.sph_run(sets, self.out / f"{n:02d}_{slug}", c["label"], n, total)
+            if results[k]:
+                results[k]["_dir"] = str(self.out / f"{n:02d}_{slug}")
+        ref_dir = self.reference(configs, results, total)
+        return configs, results, ref_dir
+
+    def reference(self, configs, results, total):
+        if self.a.reference:
+            d = pathlib.Path(self.a.reference)
+            if not (d / "summary.json").is_file():
+                fail(f"--reference {d}: no summary.json there")
+            return d
+        dt = self.a.reference_dt
+        if dt is None:
+            glob = [r for r, c in zip(results, configs) if r and c["mode"] == "global" and not c["sets"]]
+            pool = glob or [r for r in results if r]
+            if not pool:
+                fail("every run failed: no step to derive the reference's from (give --reference-dt)")
+            dt = 0.5 * min(r["min_dt_s"] for r in pool)
+        d = self.out / "reference"
+        s = self.sph_run([f"simulation.method={self.scene_method()}", "simulation.stepping.mode=constant",
+                          f"simulation.stepping.dt={dt!r}"], d, f"reference (constant, dt = {dt * 1e3:.4g} ms)",
+                         total, total)
+        if s is None:
+            fail("the reference run failed")
+        return d
+
+
+# ---- accuracy ----
+
+def primary_series(run_dir, probes):
+    """{series name: (t, values, unit)}: each probe's primary column, and the kinetic energy."""
+    out = {}
+    for i, p in enumerate(probes):
+        name = p.get("name", f"{p['type']}_{i}")
+        f = pathlib.Path(run_dir) / "probes" / f"{name}.csv"
+        if not f.is_file():
+            continue
+        d = read_csv(f)
+        if p["type"] == "fluid":
+            out["kinetic energy"] = (d["t"], d["kinetic"], "J")
+        elif p["type"] == "pressure":
+            out[name] = (d["t"], d["p"], "Pa")
+        elif p["type"] == "height":
+            out[name] = (d["t"], d["height"], "m")
+        else:
+            out[name] = (d["t"], d["front"], "m")
+    return out
+
+
+def deviation(run, ref):
+    t, v, _ = run
+    tr, vr, _ = ref
+    keep = tr <= t[-1] + 1e-12
+    if not keep.any():
+        return float("nan"), float("nan")
+    dev = np.interp(tr[keep], t, v) - vr[keep]
+    rms = float(np.sqrt(np.mean(dev ** 2)))
+    span = float(vr.max() - vr.min())
+    return rms, (rms / span if span > 0 else float("nan"))
+
+
+def experiment_error(run_dir, probe, scene_dir):
+    e = probe["experiment"]
+    name = probe.get("name")
+    d = read_csv(pathlib.Path(run_dir) / "probes" / f"{name}.csv")
+    col = {"fluid": "kinetic", "pressure": "p", "height": "height"}.get(probe["type"], "front")
+    T = d["t"] * e.get("t_scale", 1.0)
+    Z = (d[col] - e.get("value_offset", 0.0)) * e.get("value_scale", 1.0)
+    x = read_csv(scene_dir / e["file"])
+    keys = [k for k in x.keys() if k not in ("a_in",)]
+    te, ze = x[keys[0]], x[keys[1]]
+    lo, hi = e.get("t_range", [-1e300, 1e300])
+    sel = (te >= lo) & (te <= hi) & (te - e.get("max_shift", 0.0) <= T[-1])
+    best = (float("inf"), 0.0)
+    n = int(round(e.get("max_shift", 0.0) / 0.005))
+    for k in range(-n, n + 1):
+        shift = 0.005 * k
+        err = (np.interp(te[sel] - shift, T, Z) - ze[sel]) / ze[sel]
+        best = min(best, (float(np.sqrt(np.mean(err ** 2))), shift))
+    return best
+
+
+def pareto_front(points):
+    """Indices of the non-dominated points (smaller wall time and smaller error are better)."""
+    front = []
+    for i, (x, y) in enumerate(points):
+        if not (math.isfinite(x) and math.isfinite(y)):
+            continue
+        dominated = any(x2 <= x and y2 <= y and (x2 < x or y2 < y) for j, (x2, y2) in enumerate(points) if j != i
+                        and math.isfinite(x2) and math.isfinite(y2))
+        if not dominated:
+            front.append(i)
+    return sorted(front, key=lambda i: points[i][0])
+
+
+def fmt(x, digits=3):
+    if x is None or (isinstance(x, float) and not math.isfinite(x)):
+        return "–"
+    if x == 0:
+        return "0"
+    return f"{x:.{digits}g}"
+
+
+def main():
+    ap = argparse.ArgumentParser(prog="sph-study", description=__doc__,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("scene")
+    ap.add_argument("--config", action="append", default=[], help="MODE [--set KEY=VALUE ...] [--name LABEL]")
+    ap.add_argument("--no-default-modes", action="store_true", help="run only the --config configurations")
+    ap.add_argument("--set", action="append", default=[], help="override for every run (and the reference)")
+    ap.add_argument("--end", type=float, help="simulated seconds (default: the scene's end_time)")
+    ap.add_argument("--scale", type=float, help="particle-count multiplier (default: the scene's)")
+    ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--reference", help="an earlier run's output folder to use as the reference")
+    ap.add_argument("--reference-dt", type=float, help="step of the reference run (default: half the smallest "
+                                                      "step of the global run)")
+    ap.add_argument("--out", help="output folder (default out/study/<scene name>)")
+    default_run = HERE / "sph-run"
+    if not default_run.exists():
+        default_run = HERE.parent / "build" / "tools" / "sph-run"
+    ap.add_argument("--sph-run", default=str(default_run))
+    args = ap.parse_args()
+    if not pathlib.Path(args.sph_run).exists():
+        fail(f"{args.sph_run}: not found (build first: cmake --build build)")
+
+    study = Study(args)
+    started = datetime.datetime.now()
+    configs, results, ref_dir = study.run()
+    ref = primary_series(ref_dir, study.probes)
+    ref_summary = json.loads((ref_dir / "summary.json").read_text())
+    scene_dir = study.scene.resolve().parent
+    exp_probes = [p for p in study.probes if "experiment" in p]
+
+    def wall_of(mode):
+        for r, c in zip(results, configs):
+            if r and c["mode"] == mode and not c["sets"] and c["method"] == study.scene_method():
+                return r["wall_time_s"]
+        return None
+
+    w_global, w_constant = wall_of("global"), wall_of("constant")
+    rows = []
+    for c, r in zip(configs, results):
+        row = {"configuration": c["label"], "method": c["method"], "mode": c["mode"]}
+        if not r:
+            row["status"] = "failed"
+            rows.append(row)
+            continue
+        stats = read_csv(pathlib.Path(r["_dir"]) / "stats.csv")
+        dt = stats["dt"]
+        row.update({
+            "status": "ok", "particles": r["fluid_particles"], "simulated_s": r["simulated_time_s"],
+            "wall_s": r["wall_time_s"], "steps": r["steps"], "avg_dt_ms": 1e3 * r["avg_dt_s"],
+            "min_dt_ms": 1e3 * r["min_dt_s"], "max_dt_ms": 1e3 * r["max_dt_s"],
+            "avg_active_pct": 100 * r["avg_active_fraction"],
+            "speedup_vs_global": w_global / r["wall_time_s"] if w_global else float("nan"),
+            "speedup_vs_constant": w_constant / r["wall_time_s"] if w_constant else float("nan"),
+            # time average over the run (each step weighted by its dt), and the maximum
+            "avg_density_error_pct": 100 * float(np.sum(stats["rho_err_avg"] * dt) / np.sum(dt)),
+            "max_density_error_pct": 100 * r["max_density_error"],
+        })
+        mine = primary_series(r["_dir"], study.probes)
+        rel = []
+        for name, series in ref.items():
+            if name in mine:
+                rms, relative = deviation(mine[name], series)
+                row[f"dev {name} ({series[2]})"] = rms
+                rel.append(relative)
+        row["deviation (mean rel.)"] = float(np.mean(rel)) if rel else float("nan")
+        for p in exp_probes:
+            err, shift = experiment_error(r["_dir"], p, scene_dir)
+            row[f"exp err {p['name']} %"] = 100 * err
+            row[f"exp shift {p['name']}"] = shift
+        rows.append(row)
+
+    # ---- tables ----
+    study.out.mkdir(parents=True, exist_ok=True)
+    columns = []
+    for row in rows:
+        for k in row:
+            if k not in columns:
+                columns.append(k)
+    with open(study.out / "study.csv", "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=columns)
+        w.writeheader()
+        w.writerows(rows)
+
+    dev_cols = [k for k in columns if k.startswith("dev ")]
+    exp_cols = [k for k in columns if k.startswith("exp err ")]
+    head = (f"`{study.scene.name}` ({configs and study.scene_method()}), {args.threads} threads, {machine()}, "
+            f"{started.strftime('%Y-%m-%d %H:%M')}, engine {source_commit()}; runs one after another, no frames. "
+            f"Reference: constant, Δt = {1e3 * ref_summary['avg_dt_s']:.4g} ms, {ref_summary['steps']:,} steps, "
+            f"{ref_summary['wall_time_s']:.1f} s wall.")
+    hdr = ["configuration", "particles", "sim s", "wall s", "steps", "Δt ms avg (min–max)", "active %",
+           "speed-up vs global", "vs constant", "ρ err avg / max %"] + \
+          [k.replace("dev ", "RMS dev ") for k in dev_cols] + ["dev (mean rel.)"] + \
+          [k.replace("exp err ", "exp. err ") + " (ΔT)" for k in exp_cols]
+    lines = [head, "", "| " + " | ".join(hdr) + " |", "|" + "---|" * len(hdr)]
+    for row in rows:
+        if row["status"] != "ok":
+            lines.append(f"| {row['configuration']} | failed (see its run.log) |" + " |" * (len(hdr) - 2))
+            continue
+        cells = [row["configuration"], f"{row['particles']:,}", f"{row['simulated_s']:.3g}", f"{row['wall_s']:.1f}",
+                 f"{row['steps']:,}", f"{row['avg_dt_ms']:.3g} ({row['min_dt_ms']:.3g}–{row['max_dt_ms']:.3g})",
+                 f"{row['avg_active_pct']:.0f}", fmt(row["speedup_vs_global"]), fmt(row["speedup_vs_constant"]),
+                 f"{row['avg_density_error_pct']:.2f} / {row['max_density_error_pct']:.1f}"]
+        cells += [fmt(row.get(k)) for k in dev_cols] + [fmt(row["deviation (mean rel.)"])]
+        cells += [f"{row[k]:.1f} ({row[k.replace('exp err ', 'exp shift ').replace(' %', '')]:+.2f})" for k in exp_cols]
+        lines.append("| " + " | ".join(cells) + " |")
+    notes = [f"* {c['label']}: {c['note']}" for c in configs if c.get("note")]
+    text = "\n".join(lines + ([""] + notes if notes else [])) + "\n"
+    (study.out / "study.md").write_text(text)
+    print()
+    print(text)
+
+    # ---- Pareto plot ----
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    ok = [r for r in rows if r["status"] == "ok"]
+    pts = [(r["wall_s"], r["deviation (mean rel.)"]) for r in ok]
+    front = pareto_front(pts)
+    fig, ax = plt.subplots(figsize=(7, 4.5), dpi=110)
+    ax.scatter([p[0] for p in pts], [p[1] for p in pts], color="0.5", zorder=2, label="configuration")
+    if front:
+        ax.plot([pts[i][0] for i in front], [pts[i][1] for i in front], "-o", color="tab:red", zorder=3,
+                label="non-dominated (Pareto front)")
+    for r, (x, y) in zip(ok, pts):
+        if math.isfinite(y):
+            ax.annotate(r["configuration"], (x, y), textcoords="offset points", xytext=(5, 4), fontsize=8)
+    ax.set_xlabel("wall time (s)")
+    ax.set_ylabel("deviation from the reference (mean RMS / range)")
+    ax.set_title(f"{study.scene_json.get('name')}: speed against accuracy ({args.threads} threads, "
+                 f"{started.strftime('%Y-%m-%d')})", fontsize=10)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(study.out / "pareto.png")
+    # ---- dt over time (He Fig. 2: dt_sim and the active fraction; Ihmsen Fig. 4: dt), every run ----
+    plot = HERE / "plot_dt.py"
+    if not plot.is_file():
+        plot = HERE.parent.parent / "tools" / "plot_dt.py"  # build/tools/sph-study -> tools/plot_dt.py
+    runs = [(r["_dir"], c["label"]) for r, c in zip(results, configs) if r]
+    if plot.is_file() and runs:
+        cmd = [sys.executable, str(plot)] + [d for d, _ in runs] + sum((["--label", l] for _, l in runs), []) + \
+              ["--out", str(study.out / "dt.png"), "--title", f"{study.scene_json.get('name')}: Δt_sim and active fraction"]
+        proc = subprocess.run(cmd, capture_output=True, text=True)
+        if proc.returncode != 0:
+            print(f"sph-study: warning: plot_dt.py failed: {proc.stderr.strip()}", file=sys.stderr)
+    print(f"wrote {study.out / 'study.md'}, {study.out / 'study.csv'}, {study.out / 'pareto.png'}, "
+          f"{study.out / 'dt.png'}")
+
+
+if __name__ == "__main__":
+    main()
