@@ -6,8 +6,17 @@ function(sph_target_options target)
   endif()
   if(SPH_SANITIZE)
     string(REPLACE ";" "," _san "${SPH_SANITIZE}")
-    target_compile_options(${target} PUBLIC -fsanitize=${_san} -fno-omit-frame-pointer -g)
-    target_link_options(${target} PUBLIC -fsanitize=${_san})
+    # -fno-sanitize-recover: an undefined-behaviour report fails the test instead of only
+    # printing (CI must not pass with a report in its log). The vptr check stays recoverable
+    # so that tests/ubsan.supp can silence oneTBB's own flow-graph downcast
+    # (_flow_graph_impl.h:368, outside this project); UBSAN_OPTIONS=halt_on_error=1 still makes
+    # every other vptr report fatal.
+    set(_recover -fno-sanitize-recover=all)
+    if("undefined" IN_LIST SPH_SANITIZE)
+      list(APPEND _recover -fsanitize-recover=vptr)
+    endif()
+    target_compile_options(${target} PUBLIC -fsanitize=${_san} ${_recover} -fno-omit-frame-pointer -g)
+    target_link_options(${target} PUBLIC -fsanitize=${_san} ${_recover})
     target_compile_definitions(${target} PUBLIC SPH_ENABLE_ASSERTS=1)
   endif()
 endfunction()
