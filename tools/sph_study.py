@@ -25,7 +25,8 @@ Configurations. By default every `method mode` pair the scene loads with (sph-ru
 more (MODE is `mode` or `method/mode`; --set keys may drop the leading `simulation.`, e.g.
 `--config "individual --set stepping.lambda_v=0.1"`). A `constant` configuration without its
 own `stepping.dt` takes the smallest step an adaptive run of the same method took (the largest
-fixed step known to be stable for the whole run, as a user without adaptivity would choose it).
+fixed step known to be stable for the whole run, as a user without adaptivity would choose it;
+the plain `global` run's if there is one).
 
 Reference. A `constant` run of the scene's method at a small step: half the smallest step the
 `global` run took (or --reference-dt), or an earlier run given with --reference DIR.
@@ -181,11 +182,11 @@ class Study:
         return s
 
     def list_modes(self):
-        proc = subprocess.run([self.a.sph_run, str(self.scene_path), "--list-modes"] +
+        proc = subprocess.run([self.a.sph_run, str(self.scene_path), "--list-modes", "-q"] +
                               sum((["--set", s] for s in self.common), []), capture_output=True, text=True)
         if proc.returncode != 0:
             fail(f"sph-run --list-modes failed: {proc.stderr.strip()}")
-        return [line.split() for line in proc.stdout.splitlines() if line.strip()]
+        return [line.split() for line in proc.stdout.splitlines() if len(line.split()) == 2 and line[0] != "["]
 
     def configurations(self):
         configs = []
@@ -213,12 +214,17 @@ class Study:
             c = configs[k]
             sets = [f"simulation.method={c['method']}", f"simulation.stepping.mode={c['mode']}"] + c["sets"]
             if c["mode"] == "constant" and not any(s.startswith("simulation.stepping.dt=") for s in c["sets"]):
-                same = [r for r, cc in zip(results, configs) if r and cc["mode"] != "constant" and
+                same = [(r, cc) for r, cc in zip(results, configs) if r and cc["mode"] != "constant" and
                         cc["method"] == c["method"]]
-                if same:
-                    dt = min(r["min_dt_s"] for r in same)
+                # the plain `global` run's smallest step (a global stability bound); an
+                # individual run's smallest dt_sim is one particle's and would be too strict
+                glob = [r for r, cc in same if cc["mode"] == "global" and not cc["sets"]]
+                pool = glob or [r for r, _ in same]
+                if pool:
+                    dt = min(r["min_dt_s"] for r in pool)
                     sets.append(f"simulation.stepping.dt={dt!r}")
-                    c["note"] = f"dt = {dt * 1e3:.4g} ms, the smallest adaptive step"
+                    c["note"] = (f"dt = {dt * 1e3:.4g} ms, the smallest step of the "
+                                 f"{'global' if glob else 'adaptive'} run")
             slug = "".join(ch if ch.isalnum() or ch in "._-" else "_" for ch in c["label"])
             results[k] = self.sph_run(sets, self.out / f"{n:02d}_{slug}", c["label"], n, total)
             if results[k]:
