@@ -48,6 +48,7 @@ import math
 import os
 import pathlib
 import platform
+import resource
 import shlex
 import subprocess
 import sys
@@ -166,6 +167,7 @@ class Study:
         out_dir.mkdir(parents=True, exist_ok=True)
         print(f"[{time.strftime('%H:%M:%S')}] run {index}/{total} {label}: {shlex.join(cmd)}", flush=True)
         t0 = time.time()
+        cpu0 = resource.getrusage(resource.RUSAGE_CHILDREN)
         with open(out_dir / "run.log", "w") as log:
             proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
             for line in proc.stdout:
@@ -173,10 +175,13 @@ class Study:
                 if " t = " in line or "error" in line or "failed" in line:
                     print(f"    {label}: {line.split('] ', 2)[-1].strip()}", flush=True)
             rc = proc.wait()
+        cpu1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+        cpu = (cpu1.ru_utime - cpu0.ru_utime) + (cpu1.ru_stime - cpu0.ru_stime)
         if rc != 0:
             print(f"    {label}: FAILED (exit {rc}); see {out_dir / 'run.log'}", flush=True)
             return None
         s = json.loads((out_dir / "summary.json").read_text())
+        s["_cpu_s"] = cpu  # whole process, set-up included: less sensitive than wall time to a shared machine
         print(f"    {label}: {s['steps']} steps, {s['wall_time_s']:.1f} s wall ({time.time() - t0:.1f} s with set-up)",
               flush=True)
         return s
@@ -378,7 +383,7 @@ def main():
         dt = stats["dt"]
         row.update({
             "status": "ok", "particles": r["fluid_particles"], "simulated_s": r["simulated_time_s"],
-            "wall_s": r["wall_time_s"], "steps": r["steps"], "avg_dt_ms": 1e3 * r["avg_dt_s"],
+            "wall_s": r["wall_time_s"], "cpu_s": r["_cpu_s"], "steps": r["steps"], "avg_dt_ms": 1e3 * r["avg_dt_s"],
             "min_dt_ms": 1e3 * r["min_dt_s"], "max_dt_ms": 1e3 * r["max_dt_s"],
             "avg_active_pct": 100 * r["avg_active_fraction"],
             "speedup_vs_global": w_global / r["wall_time_s"] if w_global else float("nan"),
@@ -419,7 +424,7 @@ def main():
             f"{started.strftime('%Y-%m-%d %H:%M')}, engine {source_commit()}; runs one after another, no frames. "
             f"Reference: constant, Δt = {1e3 * ref_summary['avg_dt_s']:.4g} ms, {ref_summary['steps']:,} steps, "
             f"{ref_summary['wall_time_s']:.1f} s wall.")
-    hdr = ["configuration", "particles", "sim s", "wall s", "steps", "Δt ms avg (min–max)", "active %",
+    hdr = ["configuration", "particles", "sim s", "wall s", "CPU s", "steps", "Δt ms avg (min–max)", "active %",
            "speed-up vs global", "vs constant", "ρ err avg / max %"] + \
           [k.replace("dev ", "RMS dev ") for k in dev_cols] + ["dev (mean rel.)"] + \
           [k.replace("exp err ", "exp. err ") + " (ΔT)" for k in exp_cols]
@@ -429,7 +434,7 @@ def main():
             lines.append(f"| {row['configuration']} | failed (see its run.log) |" + " |" * (len(hdr) - 2))
             continue
         cells = [row["configuration"], f"{row['particles']:,}", f"{row['simulated_s']:.3g}", f"{row['wall_s']:.1f}",
-                 f"{row['steps']:,}", f"{row['avg_dt_ms']:.3g} ({row['min_dt_ms']:.3g}–{row['max_dt_ms']:.3g})",
+                 f"{row['cpu_s']:.1f}", f"{row['steps']:,}", f"{row['avg_dt_ms']:.3g} ({row['min_dt_ms']:.3g}–{row['max_dt_ms']:.3g})",
                  f"{row['avg_active_pct']:.0f}", fmt(row["speedup_vs_global"]), fmt(row["speedup_vs_constant"]),
                  f"{row['avg_density_error_pct']:.2f} / {row['max_density_error_pct']:.1f}"]
         cells += [fmt(row.get(k)) for k in dev_cols] + [fmt(row["deviation (mean rel.)"])]
