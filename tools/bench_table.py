@@ -5,6 +5,7 @@ repetitions where present, with the machine context and date the run recorded.
 usage: tools/bench_table.py out/bench.json
 """
 import json
+import re
 import sys
 
 data = json.load(open(sys.argv[1]))
@@ -15,7 +16,7 @@ print(f"`sph-bench` on {ctx.get('num_cpus')} × {ctx.get('mhz_per_cpu')} MHz, {c
 print("| benchmark | particles | time per iteration | items/s | neighbours/particle | bytes/particle |")
 print("|---|---|---|---|---|---|")
 for b in rows:
-    name = b["run_name"].replace("/min_time:3.000", "").replace("/real_time", "")
+    name = re.sub(r"/min_time:[0-9.]+", "", b["run_name"]).replace("/real_time", "")
     n = b.get("particles", b.get("fluid_particles", 0))
     unit = b.get("time_unit", "ns")
     bpp = b.get("bytes_per_particle")

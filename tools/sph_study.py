@@ -25,7 +25,8 @@ Configurations. By default every `method mode` pair the scene loads with (sph-ru
 more (MODE is `mode` or `method/mode`; --set keys may drop the leading `simulation.`, e.g.
 `--config "individual --set stepping.lambda_v=0.1"`). A `constant` configuration without its
 own `stepping.dt` takes the smallest step an adaptive run of the same method took (the largest
-fixed step known to be stable for the whole run, as a user without adaptivity would choose it).
+fixed step known to be stable for the whole run, as a user without adaptivity would choose it;
+the plain `global` run's if there is one).
 
 Reference. A `constant` run of the scene's method at a small step: half the smallest step the
 `global` run took (or --reference-dt), or an earlier run given with --reference DIR.
@@ -47,6 +48,7 @@ import math
 import os
 import pathlib
 import platform
+import resource
 import shlex
 import subprocess
 import sys
@@ -165,6 +167,7 @@ class Study:
         out_dir.mkdir(parents=True, exist_ok=True)
         print(f"[{time.strftime('%H:%M:%S')}] run {index}/{total} {label}: {shlex.join(cmd)}", flush=True)
         t0 = time.time()
+        cpu0 = resource.getrusage(resource.RUSAGE_CHILDREN)
         with open(out_dir / "run.log", "w") as log:
             proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
             for line in proc.stdout:
@@ -172,20 +175,23 @@ class Study:
                 if " t = " in line or "error" in line or "failed" in line:
                     print(f"    {label}: {line.split('] ', 2)[-1].strip()}", flush=True)
             rc = proc.wait()
+        cpu1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+        cpu = (cpu1.ru_utime - cpu0.ru_utime) + (cpu1.ru_stime - cpu0.ru_stime)
         if rc != 0:
             print(f"    {label}: FAILED (exit {rc}); see {out_dir / 'run.log'}", flush=True)
             return None
         s = json.loads((out_dir / "summary.json").read_text())
+        s["_cpu_s"] = cpu  # whole process, set-up included: less sensitive than wall time to a shared machine
         print(f"    {label}: {s['steps']} steps, {s['wall_time_s']:.1f} s wall ({time.time() - t0:.1f} s with set-up)",
               flush=True)
         return s
 
     def list_modes(self):
-        proc = subprocess.run([self.a.sph_run, str(self.scene_path), "--list-modes"] +
+        proc = subprocess.run([self.a.sph_run, str(self.scene_path), "--list-modes", "-q"] +
                               sum((["--set", s] for s in self.common), []), capture_output=True, text=True)
         if proc.returncode != 0:
             fail(f"sph-run --list-modes failed: {proc.stderr.strip()}")
-        return [line.split() for line in proc.stdout.splitlines() if line.strip()]
+        return [line.split() for line in proc.stdout.splitlines() if len(line.split()) == 2 and line[0] != "["]
 
     def configurations(self):
         configs = []
@@ -213,12 +219,17 @@ class Study:
             c = configs[k]
             sets = [f"simulation.method={c['method']}", f"simulation.stepping.mode={c['mode']}"] + c["sets"]
             if c["mode"] == "constant" and not any(s.startswith("simulation.stepping.dt=") for s in c["sets"]):
-                same = [r for r, cc in zip(results, configs) if r and cc["mode"] != "constant" and
+                same = [(r, cc) for r, cc in zip(results, configs) if r and cc["mode"] != "constant" and
                         cc["method"] == c["method"]]
-                if same:
-                    dt = min(r["min_dt_s"] for r in same)
+                # the plain `global` run's smallest step (a global stability bound); an
+                # individual run's smallest dt_sim is one particle's and would be too strict
+                glob = [r for r, cc in same if cc["mode"] == "global" and not cc["sets"]]
+                pool = glob or [r for r, _ in same]
+                if pool:
+                    dt = min(r["min_dt_s"] for r in pool)
                     sets.append(f"simulation.stepping.dt={dt!r}")
-                    c["note"] = f"dt = {dt * 1e3:.4g} ms, the smallest adaptive step"
+                    c["note"] = (f"dt = {dt * 1e3:.4g} ms, the smallest step of the "
+                                 f"{'global' if glob else 'adaptive'} run")
             slug = "".join(ch if ch.isalnum() or ch in "._-" else "_" for ch in c["label"])
             results[k] = self.sph_run(sets, self.out / f"{n:02d}_{slug}", c["label"], n, total)
             if results[k]:
@@ -372,7 +383,7 @@ def main():
         dt = stats["dt"]
         row.update({
             "status": "ok", "particles": r["fluid_particles"], "simulated_s": r["simulated_time_s"],
-            "wall_s": r["wall_time_s"], "steps": r["steps"], "avg_dt_ms": 1e3 * r["avg_dt_s"],
+            "wall_s": r["wall_time_s"], "cpu_s": r["_cpu_s"], "steps": r["steps"], "avg_dt_ms": 1e3 * r["avg_dt_s"],
             "min_dt_ms": 1e3 * r["min_dt_s"], "max_dt_ms": 1e3 * r["max_dt_s"],
             "avg_active_pct": 100 * r["avg_active_fraction"],
             "speedup_vs_global": w_global / r["wall_time_s"] if w_global else float("nan"),
@@ -413,7 +424,7 @@ def main():
             f"{started.strftime('%Y-%m-%d %H:%M')}, engine {source_commit()}; runs one after another, no frames. "
             f"Reference: constant, Δt = {1e3 * ref_summary['avg_dt_s']:.4g} ms, {ref_summary['steps']:,} steps, "
             f"{ref_summary['wall_time_s']:.1f} s wall.")
-    hdr = ["configuration", "particles", "sim s", "wall s", "steps", "Δt ms avg (min–max)", "active %",
+    hdr = ["configuration", "particles", "sim s", "wall s", "CPU s", "steps", "Δt ms avg (min–max)", "active %",
            "speed-up vs global", "vs constant", "ρ err avg / max %"] + \
           [k.replace("dev ", "RMS dev ") for k in dev_cols] + ["dev (mean rel.)"] + \
           [k.replace("exp err ", "exp. err ") + " (ΔT)" for k in exp_cols]
@@ -423,7 +434,7 @@ def main():
             lines.append(f"| {row['configuration']} | failed (see its run.log) |" + " |" * (len(hdr) - 2))
             continue
         cells = [row["configuration"], f"{row['particles']:,}", f"{row['simulated_s']:.3g}", f"{row['wall_s']:.1f}",
-                 f"{row['steps']:,}", f"{row['avg_dt_ms']:.3g} ({row['min_dt_ms']:.3g}–{row['max_dt_ms']:.3g})",
+                 f"{row['cpu_s']:.1f}", f"{row['steps']:,}", f"{row['avg_dt_ms']:.3g} ({row['min_dt_ms']:.3g}–{row['max_dt_ms']:.3g})",
                  f"{row['avg_active_pct']:.0f}", fmt(row["speedup_vs_global"]), fmt(row["speedup_vs_constant"]),
                  f"{row['avg_density_error_pct']:.2f} / {row['max_density_error_pct']:.1f}"]
         cells += [fmt(row.get(k)) for k in dev_cols] + [fmt(row["deviation (mean rel.)"])]
