@@ -8,7 +8,7 @@
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
-#include <array>
+#include <cctype>
 #include <cmath>
 #include <limits>
 #include <numeric>
