@@ -12,7 +12,21 @@
 
 namespace sph {
 
-std::vector<Edge> derive_edges(const std::vector<Access>& accesses) {
+std::vector<Edge> derive_edges(const std::vector<Access>& declared) {
+    // A system that writes `fluid.count` resizes every fluid column (an emitter), so every
+    // access to a `fluid.*` resource implicitly reads the count: the resize is ordered after
+    // the systems before it in the recipe and before those after it. Without this, an emitter
+    // and a system sharing no declared column (pcisph_reset zeroing pressure_acceleration) ran
+    // concurrently while the column was reallocated.
+    const std::string count = "fluid.count";
+    std::vector<Access> accesses = declared;
+    for (Access& a : accesses) {
+        const auto fluid = [](const std::string& r) { return r.rfind("fluid.", 0) == 0; };
+        const bool touches = std::any_of(a.reads.begin(), a.reads.end(), fluid) ||
+                             std::any_of(a.writes.begin(), a.writes.end(), fluid);
+        const auto has = [&](const std::vector<std::string>& v) { return std::find(v.begin(), v.end(), count) != v.end(); };
+        if (touches && !has(a.reads) && !has(a.writes)) a.reads.push_back(count);
+    }
     std::vector<Edge> edges;
     std::map<std::string, std::size_t> last_writer;
     std::map<std::string, std::vector<std::size_t>> readers;  // since the last write

@@ -19,6 +19,7 @@ using Edge = std::pair<std::size_t, std::size_t>;
 /// @brief Derives the dependency edges from declared accesses, in recipe order:
 /// read-after-write (last writer -> reader), write-after-write (last writer -> writer) and
 /// write-after-read (readers since the last write -> writer). Sorted, without duplicates.
+/// Writing `fluid.count` (resizing the fluid set) conflicts with every `fluid.*` access.
 std::vector<Edge> derive_edges(const std::vector<Access>& accesses);
 
 class SystemGraph {

@@ -11,9 +11,9 @@ seconds=${1:-60}
 out=build-fuzz
 mkdir -p "$out/corpus"
 cxx=$(command -v clang++ || command -v clang++-14)
-if [ ! -x "$out/scene_fuzzer" ] || [ -n "$(find engine/scene.cpp engine/scene.hpp engine/motion.cpp engine/errors.cpp tests/fuzz/scene_fuzzer.cpp -newer "$out/scene_fuzzer")" ]; then
+if [ ! -x "$out/scene_fuzzer" ] || [ -n "$(find engine/scene.cpp engine/scene.hpp engine/motion.cpp engine/errors.cpp engine/probe_desc.cpp engine/probe_desc.hpp tests/fuzz/scene_fuzzer.cpp -newer "$out/scene_fuzzer")" ]; then
   "$cxx" -std=c++20 -O1 -g -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined \
-    -I. -I/usr/include/eigen3 tests/fuzz/scene_fuzzer.cpp engine/scene.cpp engine/errors.cpp engine/motion.cpp \
+    -I. -I/usr/include/eigen3 tests/fuzz/scene_fuzzer.cpp engine/scene.cpp engine/errors.cpp engine/motion.cpp engine/probe_desc.cpp \
     -o "$out/scene_fuzzer"
 fi
 # Work on a copy: the repository's corpus changes only with --merge.

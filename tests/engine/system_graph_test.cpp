@@ -59,6 +59,25 @@ TEST(DeriveEdges, ReadWriteSameResourceChainsInOrder) {
     EXPECT_EQ(derive_edges(a), expect);
 }
 
+TEST(DeriveEdges, ResizingTheFluidSetOrdersEveryFluidAccess) {
+    // The PCISPH recipe with an emitter: 0 step size, 1 emitter (resizes every fluid column),
+    // 2 a system that only zeroes a column no one else declared, 3 one that touches no fluid
+    // resource. 2 must follow 1 (before the fix the two ran concurrently while the column was
+    // reallocated: ASan run of Emitter.NeverInsertsInsideParticlesOrBoundaries); 3 stays free.
+    // The step-size system reads a fluid column before the resize, so 1 must follow it too.
+    std::vector<Access> a{
+        {{"fluid.velocity"}, {"step.dt"}},
+        {{"step.dt"}, {"fluid.position", "fluid.velocity", "fluid.count"}},
+        {{}, {"fluid.pressure_acceleration"}},
+        {{"boundary.position"}, {"boundary.grid"}},
+    };
+    const std::vector<Edge> expect{{0, 1}, {1, 2}};
+    EXPECT_EQ(derive_edges(a), expect);
+    // Without a writer of fluid.count nothing changes: fluid systems sharing no column stay free.
+    a[1].writes.pop_back();
+    EXPECT_EQ(derive_edges(a), (std::vector<Edge>{{0, 1}}));
+}
+
 // Running the flow graph respects every edge, runs every node once per run, and rethrows a
 // system's exception while skipping what follows it.
 TEST(SystemGraph, RunsInDependencyOrder) {
