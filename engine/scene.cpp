@@ -3,6 +3,8 @@
 /// JSON path, the value found and what was expected (format and ranges: scenes/README.md).
 #include "engine/scene.hpp"
 
+#include <Eigen/Geometry>
+
 #include <unistd.h>
 
 #include <algorithm>
@@ -100,6 +102,19 @@ const char* to_string(FrameFormat f) {
             return "ply";
     }
     return "unknown";
+}
+
+std::vector<Vec3d> emitter_disc(const EmitterDesc& e, double spacing) {
+    const Vec3d n = e.velocity.normalized();
+    const Vec3d u = (std::abs(n.x()) < 0.9 ? Vec3d::UnitX() : Vec3d::UnitY()).cross(n).normalized();
+    const Vec3d v = n.cross(u);
+    const int k = int(std::floor(std::min(e.radius / spacing, 1e3)));
+    std::vector<Vec3d> out;
+    for (int j = -k; j <= k; ++j)
+        for (int i = -k; i <= k; ++i)
+            if (double(i * i + j * j) * spacing * spacing <= e.radius * e.radius)
+                out.push_back(e.position + spacing * (i * u + j * v));
+    return out;
 }
 
 Vec3d reference_point(const BoundaryDesc& b) {
@@ -676,6 +691,33 @@ bool overlaps(const Aabb& box, const Vec3d& center, double radius) {
     return (closest - center).squaredNorm() < radius * radius;
 }
 
+/// Distance from p into the fluid side of boundary b: positive in the space the fluid may fill,
+/// negative inside a solid or outside a container. Height fields and meshes return +inf: the
+/// loader does not check against them (the emitter skips candidates next to their particles at
+/// run time).
+double clearance(const BoundaryDesc& b, const Vec3d& p) {
+    switch (b.shape) {
+        case BoundaryShape::Container:
+            return std::min((p - b.box.min).minCoeff(), (b.box.max - p).minCoeff());
+        case BoundaryShape::Box: {  // signed distance to a solid box
+            const Vec3d q = (p - 0.5 * (b.box.min + b.box.max)).cwiseAbs() - 0.5 * b.box.extent();
+            return q.cwiseMax(0.0).norm() + std::min(q.maxCoeff(), 0.0);
+        }
+        case BoundaryShape::Sphere:
+            return (p - b.center).norm() - b.radius;
+        case BoundaryShape::Cylinder: {  // a 2-D box in (radial, along) coordinates
+            const Vec3d d = p - b.center;
+            const double along = d.dot(b.axis), radial = (d - along * b.axis).norm();
+            const Eigen::Vector2d q(radial - b.radius, std::abs(along - 0.5 * b.height) - 0.5 * b.height);
+            return q.cwiseMax(0.0).norm() + std::min(q.maxCoeff(), 0.0);
+        }
+        case BoundaryShape::Heightfield:
+        case BoundaryShape::Mesh:
+            break;
+    }
+    return std::numeric_limits<double>::infinity();
+}
+
 double surface_area(const Aabb& box) {
     const Vec3d e = box.extent();
     return 2.0 * (e.x() * e.y() + e.y() * e.z() + e.z() * e.x());
@@ -1148,7 +1190,11 @@ class Reader {
             if (!std::filesystem::is_regular_file(path))
                 fail(child(n.path, "file"), dump(*f), std::string(what) + "; there is no such file in the scene file's folder");
             b.file = path;
-            read_obj(path, b.vertices, b.triangles);
+            try {
+                read_obj(path, b.vertices, b.triangles, f->get<std::string>());
+            } catch (const InputError& e) {  // a corrupt file: name it as the scene does
+                fail(child(n.path, "file"), dump(*f), std::string(what) + "; " + e.what());
+            }
             if (b.triangles.empty())
                 fail(child(n.path, "file"), dump(*f), std::string(what) + " with at least one face (f line)");
             for (auto& v : b.vertices) v = scale * v + translate;
@@ -1354,6 +1400,8 @@ class Reader {
             }
         }
 
+        for (std::size_t i = 0; i < s.emitters.size(); ++i) check_emitter(s, i, spacing);
+
         // Memory estimate: ~400 bytes per fluid particle (all columns, neighbour lists), ~100
         // per boundary particle sampled at spacing 2 r on the boundary surfaces.
         double fluid_count = 0.0, area = 0.0;
@@ -1375,6 +1423,52 @@ class Reader {
                         fmt_large(fluid_count, 0) +
                         " fluid particles, more than this machine's physical memory",
                     {radius_path, scale_path});
+        }
+    }
+
+    /// An emitter's disc (its candidate lattice, emitter_system.cpp) and the two particle layers
+    /// in front of it along its velocity, 2 x spacing, must lie in the domain and on the fluid
+    /// side of every container, box, sphere and cylinder at t = 0: otherwise candidates sit in a
+    /// wall, or the emitter points into one and the first layers have nowhere to go.
+    void check_emitter(const Scene& s, std::size_t i, double spacing) const {
+        const EmitterDesc& em = s.emitters[i];
+        const std::string path = child("/emitters", i), spacing_paths = "/fluid/particle_radius";
+        const Vec3d n = em.velocity.normalized();
+        const std::vector<Vec3d> disc = emitter_disc(em, spacing);
+        const double ahead = 2.0 * spacing;
+        for (int layer = 0; layer <= 4; ++layer) {
+            const double off = ahead * layer / 4.0;
+            for (const Vec3d& on_disc : disc) {
+                    const Vec3d p = on_disc + off * n;
+                    const std::string at = (layer == 0 ? "the disc point " : "the point ") + fmt_vec_computed(p);
+                    if (s.domain && !s.domain->contains(p)) {
+                        fail_at(path, dump_at(path),
+                                layer == 0 ? "an emitter disc inside the domain (min " + fmt_vec(s.domain->min) +
+                                                 ", max " + fmt_vec(s.domain->max) + "); " + at + " is outside"
+                                           : "an emitter that does not point out of the domain (min " +
+                                                 fmt_vec(s.domain->min) + ", max " + fmt_vec(s.domain->max) +
+                                                 "): " + at + ", " + fmt_computed(off) +
+                                                 " m in front of the disc along its velocity, is outside",
+                                {path, "/domain"});
+                    }
+                    for (std::size_t b = 0; b < s.boundaries.size(); ++b) {
+                        const BoundaryDesc& declared = s.boundaries[b];
+                        const BoundaryDesc bd =
+                            declared.motion ? translated(declared, displacement(*declared.motion, 0.0)) : declared;
+                        if (clearance(bd, p) > 0.0) continue;
+                        const std::string bpath = child("/boundaries", b);
+                        const std::string shape = std::string(to_string(bd.shape)) + " " + bpath;
+                        fail_at(path, dump_at(path),
+                                layer == 0 ? "an emitter disc on the fluid side of every boundary; " + at +
+                                                 (bd.shape == BoundaryShape::Container ? " is outside the " : " is inside the ") + shape
+                                           : "an emitter that does not point into a wall: the first two layers it "
+                                             "emits fill the " + fmt_computed(ahead) +
+                                                 " m (2 x spacing) in front of its disc, and " + at + ", " +
+                                                 fmt_computed(off) + " m along its velocity, is beyond the wall of the " +
+                                                 shape,
+                                {path, bpath, spacing_paths});
+                    }
+            }
         }
     }
 
@@ -1474,9 +1568,11 @@ std::pair<std::string, nlohmann::json> parse_override(const std::string& assignm
     return {pointer, value};
 }
 
-void read_obj(const std::filesystem::path& file, std::vector<Vec3d>& vertices, std::vector<std::array<int, 3>>& triangles) {
+void read_obj(const std::filesystem::path& file, std::vector<Vec3d>& vertices, std::vector<std::array<int, 3>>& triangles,
+              const std::string& name) {
+    const std::string shown = name.empty() ? file.string() : name;
     std::FILE* f = std::fopen(file.string().c_str(), "rb");
-    if (!f) throw InputError(file.string() + ": cannot open OBJ file");
+    if (!f) throw InputError(shown + ": cannot open OBJ file");
     std::string text;
     std::array<char, 1 << 16> buf{};
     std::size_t got = 0;
@@ -1493,7 +1589,7 @@ void read_obj(const std::filesystem::path& file, std::vector<Vec3d>& vertices, s
         ++line_no;
         if (!line.empty() && line.back() == '\r') line.pop_back();
         const auto bad = [&](const std::string& why) {
-            return InputError(file.string() + ":" + std::to_string(line_no) + ": " + why + " in \"" + truncate(line, 60) + "\"");
+            return InputError(shown + ":" + std::to_string(line_no) + ": " + why + " in \"" + truncate(line, 60) + "\"");
         };
         std::size_t p = line.find_first_not_of(" \t");
         if (p == std::string::npos || line[p] == '#') continue;

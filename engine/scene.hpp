@@ -141,8 +141,9 @@ struct BoundaryDesc {
 
 /// @brief Reads the triangles of a Wavefront OBJ file (`v` and `f` lines; polygons are fanned
 /// into triangles; `vt`/`vn` references and other statements are ignored). Throws InputError
-/// naming the file and line of a malformed statement.
-void read_obj(const std::filesystem::path& file, std::vector<Vec3d>& vertices, std::vector<std::array<int, 3>>& triangles);
+/// naming the file (as `name`, when given) and line of a malformed statement.
+void read_obj(const std::filesystem::path& file, std::vector<Vec3d>& vertices, std::vector<std::array<int, 3>>& triangles,
+              const std::string& name = {});
 
 /// @brief The point a circle motion carries round its circle: the centre of the box or sphere.
 Vec3d reference_point(const BoundaryDesc& b);
@@ -163,6 +164,10 @@ struct EmitterDesc {
     double end = std::numeric_limits<double>::infinity();  ///< s
     std::uint64_t max_particles = std::numeric_limits<std::uint64_t>::max();  ///< this emitter's total
 };
+
+/// @brief The candidate positions of an emitter, in the order they are tried: a square lattice of
+/// the given spacing (2 r) over its disc, normal to its velocity (at most 2001 per row).
+std::vector<Vec3d> emitter_disc(const EmitterDesc& e, double spacing);
 
 /// @brief Particle frame formats: VTK .vtu (ParaView), Houdini classic .bgeo (partio),
 /// binary .ply (Blender).

@@ -37,12 +37,6 @@ void EmitterSystem::run(World& w) {
         const double active = std::min(t + dt, em.end) - std::max(t, em.start);
         w.emitters.budget[e] = std::min(w.emitters.budget[e] + em.rate * active, 1e7);
         if (w.emitters.budget[e] < 1.0) continue;
-        // Disc frame.
-        const Vec3d n = em.velocity.normalized();
-        const Vec3d u = (std::abs(n.x()) < 0.9 ? Vec3d::UnitX() : Vec3d::UnitY()).cross(n).normalized();
-        const Vec3d v = n.cross(u);
-        const int k = int(std::floor(em.radius / double(r0)));
-        // Fluid particles that could be near the disc (one O(N) pass).
         const auto x = w.fluid.store.get(comp::position);
         const Real reach = Real(em.radius) + r0;
         const Vec3 c = em.position.cast<Real>();
@@ -50,11 +44,9 @@ void EmitterSystem::run(World& w) {
         for (const Vec3& p : x)
             if ((p - c).squaredNorm() < reach * reach) near.push_back(p);
         std::vector<Vec3> add;
-        for (int j = -k; j <= k && w.emitters.budget[e] >= 1.0; ++j)
-            for (int i = -k; i <= k && w.emitters.budget[e] >= 1.0; ++i) {
-                if (double(i * i + j * j) * double(r0) * double(r0) > em.radius * em.radius) continue;
-                if (w.emitters.emitted[e] + add.size() >= em.max_particles) break;
-                const Vec3 p = (em.position + double(r0) * (i * u + j * v)).cast<Real>();
+        for (const Vec3d& candidate : emitter_disc(em, double(r0))) {
+                if (w.emitters.budget[e] < 1.0 || w.emitters.emitted[e] + add.size() >= em.max_particles) break;
+                const Vec3 p = candidate.cast<Real>();
                 bool clear = true;
                 for (const Vec3& q : near)
                     if ((p - q).squaredNorm() < min_d2) clear = false;
@@ -67,7 +59,7 @@ void EmitterSystem::run(World& w) {
                 if (!clear) continue;
                 add.push_back(p);
                 w.emitters.budget[e] -= 1.0;
-            }
+        }
         if (add.empty()) continue;
         const std::size_t n0 = w.fluid.size();
         w.fluid.store.resize(n0 + add.size());
