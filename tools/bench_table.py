@@ -10,7 +10,13 @@ import sys
 
 data = json.load(open(sys.argv[1]))
 ctx = data["context"]
-rows = [b for b in data["benchmarks"] if b.get("aggregate_name", "median") == "median"]
+# With --benchmark_repetitions a run has iteration rows and aggregate rows: keep the median
+# aggregate only; a run without repetitions has just its iteration row. Sorted by name, since
+# --benchmark_enable_random_interleaving shuffles the order.
+aggregated = {b["run_name"] for b in data["benchmarks"] if b.get("run_type") == "aggregate"}
+rows = [b for b in data["benchmarks"]
+        if (b.get("aggregate_name") == "median") or (b.get("run_type") != "aggregate" and b["run_name"] not in aggregated)]
+rows.sort(key=lambda b: b["run_name"])
 print(f"`sph-bench` on {ctx.get('num_cpus')} × {ctx.get('mhz_per_cpu')} MHz, {ctx.get('date')}; engine built Release "
       f"(Debian's libbenchmark reports itself as {ctx.get('library_build_type')}); medians of {rows[0].get('repetitions', 1) if rows else 0} repetitions.\n")
 print("| benchmark | particles | time per iteration | items/s | neighbours/particle | bytes/particle |")
@@ -22,3 +28,15 @@ for b in rows:
     bpp = b.get("bytes_per_particle")
     print(f"| `{name}` | {n:,.0f} | {b['real_time']:.3g} {unit} | {b['items_per_second'] / 1e6:.2f} M | "
           f"{b.get('neighbours_per_particle', 0):.1f} | {'%.0f' % bpp if bpp else ''} |")
+
+# Thread scaling, from the same run: the ratio of the 1-thread to the 2-thread median.
+by_name = {re.sub(r"/min_time:[0-9.]+", "", b["run_name"]).replace("/real_time", ""): b for b in rows}
+pairs = [(n, n.replace("threads:1", "threads:2")) for n in by_name if "threads:1" in n]
+pairs = [(a, b) for a, b in pairs if b in by_name]
+if pairs:
+    print("\n| benchmark | 1 thread | 2 threads | speed-up |")
+    print("|---|---|---|---|")
+    for a, b in pairs:
+        t1, t2 = by_name[a]["real_time"], by_name[b]["real_time"]
+        unit = by_name[a].get("time_unit", "ns")
+        print(f"| `{a.replace('/threads:1', '')}` | {t1:.3g} {unit} | {t2:.3g} {unit} | {t1 / t2:.2f}× |")
