@@ -1391,6 +1391,16 @@ class Reader {
                             {path, child("/boundaries", j)});
                 }
             }
+            for (std::size_t j = 0; j < i; ++j) {  // two lattices in one place: coincident particles
+                const Aabb& other = s.fluid_blocks[j].box;
+                if (overlaps(box, other)) {
+                    const std::string opath = child("/fluid_blocks", j);
+                    fail_at(path, dump_at(path),
+                            "a block clear of " + opath + " (min " + fmt_vec(other.min) + ", max " + fmt_vec(other.max) +
+                                "): overlapping blocks put particles on top of each other; sharing a face is fine",
+                            {path, opath});
+                }
+            }
             if (lattice_cells(box, spacing).minCoeff() < 1.0) {
                 fail_at(path, dump_at(path),
                         "a block at least " + fmt_computed(spacing) +

@@ -13,6 +13,8 @@
 
 #include "engine/errors.hpp"
 #include "engine/scene.hpp"
+#include "engine/components.hpp"
+#include "systems/methods/wcsph.hpp"
 
 namespace sph {
 namespace {
@@ -259,6 +261,27 @@ TEST(SceneLoader, BlockSharingAFaceWithAnObstacleIsAllowed) {
                      {"type": "sphere", "center": [0.25, 0.75, 0.25], "radius": 0.25}]
     })";
     EXPECT_NO_THROW(parse_scene(text, "t.json"));
+}
+
+// Blocks that share a face are valid (cross_blocks_overlap in the corpus is the overlapping
+// case): their lattices interleave without a coincident pair. Bound: the nearest pair is at
+// least 0.9 spacing apart (the hydrostatic start compresses the lattice along gravity by
+// rho0 g H / (rho0 c_s^2) ~ 1e-3, far less than 10 %), where overlapping lattices would put
+// pairs at distance 0.
+TEST(SceneLoader, BlocksSharingAFaceGiveNoCoincidentParticles) {
+    const char* const text = R"({
+      "name": "t",
+      "fluid_blocks": [{"min": [0, 0, 0], "max": [0.1, 0.1, 0.1]}, {"min": [0.1, 0, 0], "max": [0.2, 0.1, 0.1]}],
+      "boundaries": [{"type": "container", "min": [0, 0, 0], "max": [0.3, 0.3, 0.3]}]
+    })";
+    const Scene scene = parse_scene(text, "t.json");
+    const auto sim = make_simulation(scene);
+    const auto x = sim->world().fluid.store.get(comp::position);
+    ASSERT_EQ(x.size(), 250u);
+    double nearest = 1e9;
+    for (std::size_t i = 0; i < x.size(); ++i)
+        for (std::size_t j = i + 1; j < x.size(); ++j) nearest = std::min(nearest, double((x[i] - x[j]).norm()));
+    EXPECT_GE(nearest, 0.9 * 2 * scene.particle_radius());
 }
 
 TEST(SceneLoader, LoadSceneReadsTheFileAndRecordsItsSource) {
