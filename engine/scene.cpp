@@ -1356,6 +1356,15 @@ class Reader {
         }
         const double spacing = 2.0 * s.particle_radius();
         const std::string radius_path = "/fluid/particle_radius", scale_path = "/simulation/scale";
+        // A moving boundary is checked where it is at t = 0 (a sinusoid with a phase starts
+        // displaced); every other motion starts at its declared geometry.
+        std::vector<BoundaryDesc> at_start;
+        std::vector<bool> shifted;
+        for (const BoundaryDesc& declared : s.boundaries) {
+            const Vec3d d0 = declared.motion ? displacement(*declared.motion, 0.0) : Vec3d::Zero();
+            at_start.push_back(declared.motion ? translated(declared, d0) : declared);
+            shifted.push_back(d0 != Vec3d::Zero());
+        }
         for (std::size_t i = 0; i < s.fluid_blocks.size(); ++i) {
             const Aabb& box = s.fluid_blocks[i].box;
             const std::string path = child("/fluid_blocks", i);
@@ -1365,15 +1374,10 @@ class Reader {
                             fmt_vec(s.domain->max) + ")",
                         {path, "/domain"});
             }
-            for (std::size_t j = 0; j < s.boundaries.size(); ++j) {
-                // A moving boundary is checked where it is at t = 0 (a sinusoid with a phase
-                // starts displaced); every other motion starts at its declared geometry.
-                const BoundaryDesc& declared = s.boundaries[j];
-                const Vec3d d0 = declared.motion ? displacement(*declared.motion, 0.0) : Vec3d::Zero();
-                const BoundaryDesc b = declared.motion ? translated(declared, d0) : declared;
-                const bool shifted = d0 != Vec3d::Zero();
-                const auto vec = [&](const Vec3d& v) { return shifted ? fmt_vec_computed(v) : fmt_vec(v); };
-                const std::string bpath = child("/boundaries", j) + (shifted ? " at t = 0" : "");
+            for (std::size_t j = 0; j < at_start.size(); ++j) {
+                const BoundaryDesc& b = at_start[j];
+                const auto vec = [&](const Vec3d& v) { return shifted[j] ? fmt_vec_computed(v) : fmt_vec(v); };
+                const std::string bpath = child("/boundaries", j) + (shifted[j] ? " at t = 0" : "");
                 const std::string where = " " + bpath + " (min " + vec(b.box.min) + ", max " +
                                           vec(b.box.max) + ")";
                 if (b.shape == BoundaryShape::Container && !inside(box, b.box)) {
@@ -1410,7 +1414,7 @@ class Reader {
             }
         }
 
-        for (std::size_t i = 0; i < s.emitters.size(); ++i) check_emitter(s, i, spacing);
+        for (std::size_t i = 0; i < s.emitters.size(); ++i) check_emitter(s, at_start, i, spacing);
 
         // Memory estimate: ~400 bytes per fluid particle (all columns, neighbour lists), ~100
         // per boundary particle sampled at spacing 2 r on the boundary surfaces.
@@ -1440,44 +1444,43 @@ class Reader {
     /// in front of it along its velocity, 2 x spacing, must lie in the domain and on the fluid
     /// side of every container, box, sphere and cylinder at t = 0: otherwise candidates sit in a
     /// wall, or the emitter points into one and the first layers have nowhere to go.
-    void check_emitter(const Scene& s, std::size_t i, double spacing) const {
+    void check_emitter(const Scene& s, const std::vector<BoundaryDesc>& at_start, std::size_t i,
+                       double spacing) const {
         const EmitterDesc& em = s.emitters[i];
-        const std::string path = child("/emitters", i), spacing_paths = "/fluid/particle_radius";
+        const std::string path = child("/emitters", i), radius_path = "/fluid/particle_radius";
         const Vec3d n = em.velocity.normalized();
         const std::vector<Vec3d> disc = emitter_disc(em, spacing);
         const double ahead = 2.0 * spacing;
         for (int layer = 0; layer <= 4; ++layer) {
             const double off = ahead * layer / 4.0;
             for (const Vec3d& on_disc : disc) {
-                    const Vec3d p = on_disc + off * n;
-                    const std::string at = (layer == 0 ? "the disc point " : "the point ") + fmt_vec_computed(p);
-                    if (s.domain && !s.domain->contains(p)) {
-                        fail_at(path, dump_at(path),
-                                layer == 0 ? "an emitter disc inside the domain (min " + fmt_vec(s.domain->min) +
-                                                 ", max " + fmt_vec(s.domain->max) + "); " + at + " is outside"
-                                           : "an emitter that does not point out of the domain (min " +
-                                                 fmt_vec(s.domain->min) + ", max " + fmt_vec(s.domain->max) +
-                                                 "): " + at + ", " + fmt_computed(off) +
-                                                 " m in front of the disc along its velocity, is outside",
-                                {path, "/domain"});
-                    }
-                    for (std::size_t b = 0; b < s.boundaries.size(); ++b) {
-                        const BoundaryDesc& declared = s.boundaries[b];
-                        const BoundaryDesc bd =
-                            declared.motion ? translated(declared, displacement(*declared.motion, 0.0)) : declared;
-                        if (clearance(bd, p) > 0.0) continue;
-                        const std::string bpath = child("/boundaries", b);
-                        const std::string shape = std::string(to_string(bd.shape)) + " " + bpath;
-                        fail_at(path, dump_at(path),
-                                layer == 0 ? "an emitter disc on the fluid side of every boundary; " + at +
-                                                 (bd.shape == BoundaryShape::Container ? " is outside the " : " is inside the ") + shape
-                                           : "an emitter that does not point into a wall: the first two layers it "
-                                             "emits fill the " + fmt_computed(ahead) +
-                                                 " m (2 x spacing) in front of its disc, and " + at + ", " +
-                                                 fmt_computed(off) + " m along its velocity, is beyond the wall of the " +
-                                                 shape,
-                                {path, bpath, spacing_paths});
-                    }
+                const Vec3d p = on_disc + off * n;
+                const std::string at = (layer == 0 ? "the disc point " : "the point ") + fmt_vec_computed(p);
+                if (s.domain && !s.domain->contains(p)) {
+                    fail_at(path, dump_at(path),
+                            layer == 0 ? "an emitter disc inside the domain (min " + fmt_vec(s.domain->min) +
+                                             ", max " + fmt_vec(s.domain->max) + "); " + at + " is outside"
+                                       : "an emitter that does not point out of the domain (min " +
+                                             fmt_vec(s.domain->min) + ", max " + fmt_vec(s.domain->max) + "): " + at +
+                                             ", " + fmt_computed(off) +
+                                             " m in front of the disc along its velocity, is outside",
+                            {path, "/domain"});
+                }
+                for (std::size_t b = 0; b < at_start.size(); ++b) {
+                    if (clearance(at_start[b], p) > 0.0) continue;
+                    const std::string bpath = child("/boundaries", b);
+                    const std::string shape = std::string(to_string(at_start[b].shape)) + " " + bpath;
+                    const bool container = at_start[b].shape == BoundaryShape::Container;
+                    fail_at(path, dump_at(path),
+                            layer == 0 ? "an emitter disc on the fluid side of every boundary; " + at +
+                                             (container ? " is outside the " : " is inside the ") + shape
+                                       : "an emitter that does not point into a wall: the first two layers it "
+                                         "emits fill the " + fmt_computed(ahead) +
+                                             " m (2 x spacing) in front of its disc, and " + at + ", " +
+                                             fmt_computed(off) + " m along its velocity, is beyond the wall of the " +
+                                             shape,
+                            {path, bpath, radius_path});
+                }
             }
         }
     }

@@ -37,6 +37,7 @@ void EmitterSystem::run(World& w) {
         const double active = std::min(t + dt, em.end) - std::max(t, em.start);
         w.emitters.budget[e] = std::min(w.emitters.budget[e] + em.rate * active, 1e7);
         if (w.emitters.budget[e] < 1.0) continue;
+        // Fluid particles that could be near the disc (one O(N) pass).
         const auto x = w.fluid.store.get(comp::position);
         const Real reach = Real(em.radius) + r0;
         const Vec3 c = em.position.cast<Real>();
@@ -45,20 +46,20 @@ void EmitterSystem::run(World& w) {
             if ((p - c).squaredNorm() < reach * reach) near.push_back(p);
         std::vector<Vec3> add;
         for (const Vec3d& candidate : emitter_disc(em, double(r0))) {
-                if (w.emitters.budget[e] < 1.0 || w.emitters.emitted[e] + add.size() >= em.max_particles) break;
-                const Vec3 p = candidate.cast<Real>();
-                bool clear = true;
-                for (const Vec3& q : near)
+            if (w.emitters.budget[e] < 1.0 || w.emitters.emitted[e] + add.size() >= em.max_particles) break;
+            const Vec3 p = candidate.cast<Real>();
+            bool clear = true;
+            for (const Vec3& q : near)
+                if ((p - q).squaredNorm() < min_d2) clear = false;
+            for (const Vec3& q : add)
+                if ((p - q).squaredNorm() < min_d2) clear = false;
+            if (clear && xb.size() > 0)
+                w.boundary_grid.for_each_candidate(p, [&](Index, const Vec3& q) {
                     if ((p - q).squaredNorm() < min_d2) clear = false;
-                for (const Vec3& q : add)
-                    if ((p - q).squaredNorm() < min_d2) clear = false;
-                if (clear && xb.size() > 0)
-                    w.boundary_grid.for_each_candidate(p, [&](Index, const Vec3& q) {
-                        if ((p - q).squaredNorm() < min_d2) clear = false;
-                    });
-                if (!clear) continue;
-                add.push_back(p);
-                w.emitters.budget[e] -= 1.0;
+                });
+            if (!clear) continue;
+            add.push_back(p);
+            w.emitters.budget[e] -= 1.0;
         }
         if (add.empty()) continue;
         const std::size_t n0 = w.fluid.size();
