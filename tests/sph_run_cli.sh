@@ -56,8 +56,12 @@ check "frames written before the NaN remain complete" '[ -f "$tmp/nan/frames/fra
 check "malformed --inject-nan exits 2 (got $rc)" '[ $rc -eq 2 ] && grep -q "expected STEP:ID" "$tmp/err6" && [ ! -e "$tmp/nan2" ]'
 
 # 5. --help and --version.
-"$run" --version | grep -q "sph-run" ; check "--version" '[ $? -eq 0 ]'
-"$run" --help | grep -q -- "--graph" ; check "--help lists --graph" '[ $? -eq 0 ]'
+# (The output is captured first: `| grep -q` under pipefail fails when grep exits early and the
+# writer dies of SIGPIPE.)
+out_version=$("$run" --version); rc_version=$?
+check "--version (exit $rc_version)" '[ $rc_version -eq 0 ] && [[ "$out_version" == *"sph-run"* ]]'
+out_help=$("$run" --help); rc_help=$?
+check "--help lists --graph (exit $rc_help)" '[ $rc_help -eq 0 ] && [[ "$out_help" == *"--graph"* ]]'
 
 [ $fail -eq 0 ] && echo "sph-run CLI: all checks passed"
 exit $fail

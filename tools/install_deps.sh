@@ -6,7 +6,7 @@ PACKAGES=(build-essential cmake libtbb-dev libeigen3-dev libspdlog-dev nlohmann-
           clang libclang-rt-14-dev)  # clang + its runtime: libFuzzer for tools/fuzz.sh
 missing=()
 for p in "${PACKAGES[@]}"; do
-  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+  [[ "$(dpkg-query -W -f='${Status}' "$p" 2>/dev/null)" == *"install ok installed"* ]] || missing+=("$p")
 done
 if ((${#missing[@]})); then
   echo "installing: ${missing[*]}"

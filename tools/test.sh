@@ -52,8 +52,11 @@ cmake -S . -B build-tsan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_REL
   -DSPH_SANITIZE=thread -DSPH_BUILD_TESTS=ON -DSPH_BUILD_BENCH=OFF -DTBB_DIR="$tbb_dir" >/dev/null
 cmake --build build-tsan -j"$jobs" --target "${tsan_targets[@]}"
 # A stage that silently ran against the uninstrumented library would prove nothing.
-ldd build-tsan/tests/system_graph_test | grep -q "build-tbb-tsan/install/lib/libtbb" ||
-  { echo "build-tsan does not load the instrumented oneTBB:"; ldd build-tsan/tests/system_graph_test; exit 1; }
+# (ldd's output is captured first: `ldd | grep -q` under pipefail fails whenever grep exits before
+# ldd has written everything and ldd dies of SIGPIPE; that failed a CI run.)
+tsan_libs=$(ldd build-tsan/tests/system_graph_test)
+[[ "$tsan_libs" == *"build-tbb-tsan/install/lib/libtbb"* ]] ||
+  { echo "build-tsan does not load the instrumented oneTBB:"; echo "$tsan_libs"; exit 1; }
 # The canary: a seeded race between two flow-graph nodes must be reported (TSan exits 66).
 tbb_prefix=${tbb_dir%/lib/cmake/TBB}
 g++ -std=c++20 -O1 -g -fsanitize=thread tests/tsan/race_canary.cpp -I"$tbb_prefix/include" -L"$tbb_prefix/lib" \
