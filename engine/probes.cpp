@@ -152,6 +152,39 @@ FluidTotals fluid_totals(const World& w) {
     return t;
 }
 
+InteriorDensityError interior_density_error(const World& w) {
+    const auto x = w.fluid.store.get(comp::position);
+    const auto rho = w.fluid.store.get(comp::density);
+    const auto xb = w.boundary.store.get(comp::position);
+    const double rho0 = w.physics.rest_density;
+    const Real h2 = w.physics.h * w.physics.h;
+    UniformGrid walls(w.domain, w.physics.h);
+    walls.build(xb);
+    struct Acc {
+        double sum = 0, max = 0;
+        std::size_t n = 0;
+    };
+    // Deterministic, as fluid_totals.
+    const Acc a = tbb::parallel_deterministic_reduce(
+        tbb::blocked_range<std::size_t>(0, x.size(), 1024), Acc{},
+        [&](const auto& r, Acc acc) {
+            for (std::size_t i = r.begin(); i < r.end(); ++i) {
+                bool near_wall = false;
+                walls.for_each_candidate(x[i], [&](Index, const Vec3& xbj) {
+                    near_wall = near_wall || (x[i] - xbj).squaredNorm() < h2;
+                });
+                if (near_wall) continue;
+                const double e = std::max(0.0, double(rho[i]) / rho0 - 1.0);
+                acc.sum += e;
+                acc.max = std::max(acc.max, e);
+                ++acc.n;
+            }
+            return acc;
+        },
+        [](Acc l, const Acc& r) { return Acc{l.sum + r.sum, std::max(l.max, r.max), l.n + r.n}; });
+    return {a.n ? a.sum / double(a.n) : 0.0, a.max, a.n};
+}
+
 // ---------------------------------------------------------------------------------------------
 // ProbeSet
 // ---------------------------------------------------------------------------------------------
@@ -196,7 +229,7 @@ ProbeSet::ProbeSet(const std::vector<ProbeDesc>& probes) : m_probes(probes), m_t
                 break;
             case ProbeType::Fluid:
                 s.columns = {"t", "kinetic", "potential", "momentum_x", "momentum_y", "momentum_z", "rho_err_avg",
-                             "rho_err_max"};
+                             "rho_err_max", "rho_err_avg_interior", "rho_err_max_interior", "interior_count"};
                 break;
         }
         m_series.push_back(std::move(s));
@@ -245,8 +278,10 @@ void ProbeSet::sample(std::size_t k, const World& w, const UniformGrid& grid) {
             break;
         case ProbeType::Fluid: {
             const FluidTotals t = fluid_totals(w);
+            const InteriorDensityError in = interior_density_error(w);
             row.insert(row.end(), {t.kinetic, t.potential, t.momentum.x(), t.momentum.y(), t.momentum.z(),
-                                   t.rho_err_avg, t.rho_err_max});
+                                   t.rho_err_avg, t.rho_err_max, in.rho_err_avg, in.rho_err_max,
+                                   double(in.count)});
             break;
         }
     }

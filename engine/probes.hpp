@@ -57,6 +57,17 @@ struct FluidTotals {
 };
 FluidTotals fluid_totals(const World& w);
 
+/// @brief Density error (clamped at 0, as in fluid_totals) over the *interior* fluid only: the
+/// particles with no boundary particle within the support h. Next to a wall the two boundary
+/// handlings differ most (without boundary density the wall layer is under-dense and counts
+/// as zero compression, lowering the whole-fluid average: Ihmsen et al. 2010 sec. 4.1 compares
+/// the handlings on that average), so this measure compares them on the fluid both treat alike.
+struct InteriorDensityError {
+    double rho_err_avg = 0, rho_err_max = 0;
+    std::size_t count = 0;  ///< interior particles
+};
+InteriorDensityError interior_density_error(const World& w);
+
 /// @brief The probes of one run.
 class ProbeSet {
 public:

@@ -96,6 +96,39 @@ TEST(Probes, FluidTotalsOfAUniformlyMovingBlock) {
     EXPECT_NEAR(t.rho_err_avg, 0.05 / n, 1e-8);
 }
 
+// The interior density error (Ihmsen sec. 4.1 comparison) against brute force over every
+// fluid/boundary pair: the particles with no boundary particle closer than h are averaged.
+// Densities follow a pattern with under-dense particles (clamped to zero error) and a 10 %
+// compressed wall layer that the measure must leave out. Tolerance 1e-12 relative: the same
+// float distances, sums in double in another order.
+TEST(Probes, InteriorDensityErrorMatchesBruteForce) {
+    auto sim = block_at_rest();
+    World& w = sim->world();
+    const auto x = w.fluid.store.get(comp::position);
+    const auto xb = w.boundary.store.get(comp::position);
+    auto rho = w.fluid.store.get(comp::density);
+    const double rho0 = w.physics.rest_density;
+    const Real h2 = w.physics.h * w.physics.h;
+    double sum = 0, max = 0;
+    std::size_t n = 0;
+    for (std::size_t i = 0; i < x.size(); ++i) {
+        bool near_wall = false;
+        for (const Vec3& b : xb) near_wall = near_wall || (x[i] - b).squaredNorm() < h2;
+        rho[i] = Real(rho0 * (near_wall ? 1.10 : 0.995 + 0.002 * double(i % 7)));
+        if (near_wall) continue;
+        const double e = std::max(0.0, double(rho[i]) / rho0 - 1.0);
+        sum += e, max = std::max(max, e), ++n;
+    }
+    ASSERT_GT(n, 0u);
+    ASSERT_LT(n, x.size());  // the block touches the floor and three walls
+    const InteriorDensityError in = interior_density_error(w);
+    EXPECT_EQ(in.count, n);
+    EXPECT_NEAR(in.rho_err_avg, sum / double(n), 1e-12);
+    EXPECT_NEAR(in.rho_err_max, max, 1e-12);
+    EXPECT_LT(in.rho_err_max, 0.01);  // the 10 % wall layer is left out
+    std::printf("probes: %zu of %zu particles interior, rho_err_avg %.5f %%\n", n, x.size(), 100 * in.rho_err_avg);
+}
+
 // Linear hydrostatic field p = rho0 g (H - y), H = 0.3 m, set on the particles. Shepard
 // interpolation reproduces a linear field exactly at an interior point of a symmetric lattice
 // (the weighted mean of y_j is y), and Adami eq. 27 extrapolates it exactly to the wall: the
@@ -149,7 +182,8 @@ TEST(Probes, RatesAndCsvFromARun) {
         return std::make_pair(header, n);
     };
     EXPECT_EQ(lines("fluid_0.csv"), std::make_pair(std::string("t,kinetic,potential,momentum_x,momentum_y,momentum_z,"
-                                                               "rho_err_avg,rho_err_max"), 11));
+                                                               "rho_err_avg,rho_err_max,rho_err_avg_interior,"
+                                                               "rho_err_max_interior,interior_count"), 11));
     EXPECT_EQ(lines("tip.csv"), std::make_pair(std::string("t,front,x_centre"), 3));
     EXPECT_EQ(lines("height_2.csv").second, 3);
     EXPECT_EQ(lines("pressure_3.csv").first, "t,p,colour");
