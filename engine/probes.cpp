@@ -155,11 +155,9 @@ FluidTotals fluid_totals(const World& w) {
 InteriorDensityError interior_density_error(const World& w) {
     const auto x = w.fluid.store.get(comp::position);
     const auto rho = w.fluid.store.get(comp::density);
-    const auto xb = w.boundary.store.get(comp::position);
+    const bool walls = w.boundary.size() > 0;
     const double rho0 = w.physics.rest_density;
     const Real h2 = w.physics.h * w.physics.h;
-    UniformGrid walls(w.domain, w.physics.h);
-    walls.build(xb);
     struct Acc {
         double sum = 0, max = 0;
         std::size_t n = 0;
@@ -169,10 +167,12 @@ InteriorDensityError interior_density_error(const World& w) {
         tbb::blocked_range<std::size_t>(0, x.size(), 1024), Acc{},
         [&](const auto& r, Acc acc) {
             for (std::size_t i = r.begin(); i < r.end(); ++i) {
+                // The world's boundary grid (kept current by the boundary motion system).
                 bool near_wall = false;
-                walls.for_each_candidate(x[i], [&](Index, const Vec3& xbj) {
-                    near_wall = near_wall || (x[i] - xbj).squaredNorm() < h2;
-                });
+                if (walls)
+                    w.boundary_grid.for_each_candidate(x[i], [&](Index, const Vec3& xbj) {
+                        near_wall = near_wall || (x[i] - xbj).squaredNorm() < h2;
+                    });
                 if (near_wall) continue;
                 const double e = std::max(0.0, double(rho[i]) / rho0 - 1.0);
                 acc.sum += e;
