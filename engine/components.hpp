@@ -29,6 +29,10 @@ inline constexpr Component<Vec3> position_last{"position_last"};
 inline constexpr Component<Vec3> velocity_last{"velocity_last"};
 inline constexpr Component<Real> density_last{"density_last"};
 
+// WCSPH with `fluid.pressure_gradient: corrected` (Bonet & Lok 1999): L_i, the inverse of the
+// kernel-gradient moment matrix M_i = -sum_j V_j grad W_ij (x_ij)^T, eigenvalues clamped.
+inline constexpr Component<Mat3> gradient_correction{"gradient_correction"};
+
 // PCISPH (Solenthaler & Pajarola 2009; Ihmsen et al. 2010 Alg. 2).
 inline constexpr Component<Vec3> predicted_position{"predicted_position"};  ///< x*(t + dt)
 inline constexpr Component<Vec3> pressure_acceleration{"pressure_acceleration"};  ///< F^p / m, eq. 6

@@ -60,6 +60,16 @@ const char* to_string(BoundaryHandling b) {
     return "unknown";
 }
 
+const char* to_string(PressureGradient g) {
+    switch (g) {
+        case PressureGradient::Symmetric:
+            return "symmetric";
+        case PressureGradient::Corrected:
+            return "corrected";
+    }
+    return "unknown";
+}
+
 const char* to_string(SteppingMode m) {
     switch (m) {
         case SteppingMode::Constant:
@@ -180,9 +190,10 @@ constexpr std::array<const char*, 7> k_simulation_keys{
     "method", "stepping", "end_time", "frame_rate", "scale", "gravity", "sort_interval"};
 constexpr std::array<const char*, 8> k_stepping_keys{"mode",     "dt",       "lambda_v", "lambda_f",
                                                      "acoustic", "lambda_c", "dt_max",   "dt_min"};
-constexpr std::array<const char*, 7> k_fluid_keys{"rest_density", "particle_radius", "viscosity",
-                                                  "speed_of_sound", "density_fluctuation",
-                                                  "surface_tension", "boundary_viscosity"};
+constexpr std::array<const char*, 8> k_fluid_keys{"rest_density",        "particle_radius", "viscosity",
+                                                  "speed_of_sound",      "density_fluctuation",
+                                                  "surface_tension",     "boundary_viscosity",
+                                                  "pressure_gradient"};
 constexpr std::array<const char*, 2> k_box_keys{"min", "max"};
 constexpr std::array<const char*, 4> k_block_keys{"min", "max", "velocity", "hydrostatic"};
 constexpr std::array<const char*, 4> k_boxlike_boundary_keys{"type", "min", "max", "motion"};
@@ -207,6 +218,7 @@ constexpr std::array<SteppingMode, 4> k_modes{SteppingMode::Constant, SteppingMo
 constexpr std::array<PcisphLoop, 2> k_loops{PcisphLoop::Fixed, PcisphLoop::UntilConverged};
 constexpr std::array<BoundaryHandling, 2> k_handlings{BoundaryHandling::Ihmsen,
                                                       BoundaryHandling::DirectForcing};
+constexpr std::array<PressureGradient, 2> k_gradients{PressureGradient::Symmetric, PressureGradient::Corrected};
 constexpr std::array<BoundaryShape, 6> k_shapes{BoundaryShape::Container, BoundaryShape::Box,
                                                 BoundaryShape::Sphere,    BoundaryShape::Cylinder,
                                                 BoundaryShape::Heightfield, BoundaryShape::Mesh};
@@ -821,6 +833,12 @@ class Reader {
                     "\"pcisph\" only",
                     {"/fluid/surface_tension", "/simulation/method"});
         }
+        if (s.fluid.pressure_gradient == PressureGradient::Corrected && pcisph) {
+            fail_at("/fluid/pressure_gradient", dump_at("/fluid/pressure_gradient"),
+                    "\"symmetric\" or no key: the corrected pressure gradient is implemented for method "
+                    "\"wcsph\" only (PCISPH has its own pressure force, Ihmsen et al. eq. 6)",
+                    {"/fluid/pressure_gradient", "/simulation/method"});
+        }
         if (const json* v = root.find("probes")) s.probes = parse_probes(*v, m_file);  // engine/probes.cpp
 
         cross_check(s);
@@ -1100,6 +1118,8 @@ class Reader {
                     p.density_fluctuation);
         read_number(n, "surface_tension", non_negative("m^3/s^2, Becker & Teschner 2007 kappa"),
                     p.surface_tension);
+        if (const json* v = n.find("pressure_gradient"))
+            p.pressure_gradient = pick_enum(n.at(*v, "pressure_gradient"), k_gradients);
     }
 
     Aabb read_box(const Node& n) const {

@@ -39,12 +39,18 @@ enum class PcisphLoop { Fixed, UntilConverged };
 /// Ihmsen 2010 sec. 3.2 (boundary density and pressure, eq. 13, plus direct forcing eq. 9-12),
 /// or `direct_forcing` alone (Becker, Teschner, Teschner 2009 eq. 7-8: no boundary density).
 enum class BoundaryHandling { Ihmsen, DirectForcing };
+/// WCSPH pressure force: `symmetric` is He et al. eq. 4; `corrected` multiplies each pair's
+/// kernel gradient by the symmetrised correction (L_i + L_j) / 2 of Bonet & Lok 1999, which
+/// makes the force first-order consistent while keeping it antisymmetric (momentum conserved)
+/// and repulsive (systems/forces/gradient_correction_system.hpp).
+enum class PressureGradient { Symmetric, Corrected };
 
 /// @brief Names as written in scene files and on the command line.
 const char* to_string(Method m);
 const char* to_string(SteppingMode m);
 const char* to_string(PcisphLoop l);
 const char* to_string(BoundaryHandling b);
+const char* to_string(PressureGradient g);
 /// @brief Every method and every stepping mode the loader knows, by name (sph-run --list-modes;
 /// the study tool runs each pair a scene accepts, so a new mode joins it with no new code).
 std::vector<std::string> method_names();
@@ -102,6 +108,9 @@ struct FluidParams {
     /// Monaghan alpha between fluid and boundary particles (default: `viscosity`); 0 makes every
     /// wall free-slip (it then exerts only its Akinci pressure force, normal to it).
     std::optional<double> boundary_viscosity;
+    /// WCSPH only: `corrected` for hydrostatic accuracy (README, Validation), at the cost of one
+    /// more pass over the neighbours per step.
+    PressureGradient pressure_gradient = PressureGradient::Symmetric;
 };
 
 /// @brief A block of fluid particles on a cubic lattice of spacing 2 r, filling [min, max].

@@ -16,6 +16,7 @@ using Real = float;
 using Vec3 = Eigen::Matrix<Real, 3, 1>;
 /// @brief Double-precision 3-vector for scene geometry and reductions.
 using Vec3d = Eigen::Matrix<double, 3, 1>;
+using Mat3 = Eigen::Matrix<Real, 3, 3>;
 using Index = std::uint32_t;
 
 }  // namespace sph

@@ -6,6 +6,9 @@
 // moving boundary, Pi_ib is evaluated with the relative velocity v_ib = v_i - v_b (Akinci et
 // al. 2012 sec. 3.3, eq. 11-12: the boundary viscosity acts on the velocity relative to the
 // rigid body), so a body drags the fluid along and fluid moving with it feels no friction.
+// Corrected pressure gradient (scene `fluid.pressure_gradient: corrected`, Bonet & Lok 1999):
+// grad W_ij in the pressure term becomes (L_i + L_j)/2 grad W_ij, symmetric in i and j, so
+// F_ij = -F_ji still holds; against the boundary L_i grad W_ib.
 // Individual stepping (He Alg. 2 lines 10-13): active particles only, plus
 // drho_i/dt = sum_j m_j v_ij . grad W_ij + sum_b psi_b v_ib . grad W_ib (He eq. 5) and
 // Delta t_i^raw = min(lambda_v h/|v_i|, lambda_f sqrt(h/|a_i|)) (line 13; the same function
@@ -32,6 +35,7 @@ Access ForcesSystem::access() const {
         a.reads.insert(a.reads.end(), {res::boundary_neighbours, res::boundary(comp::position.name),
                                        res::boundary(comp::volume.name)});
     if (m_with_boundary && m_moving_boundary) a.reads.push_back(res::boundary(comp::velocity.name));
+    if (m_corrected) a.reads.push_back(res::fluid(comp::gradient_correction.name));
     if (m_individual) {
         a.reads.push_back(res::active_set);
         a.writes.insert(a.writes.end(), {res::fluid(comp::drho_dt.name), res::fluid(comp::dt_raw.name),
@@ -75,10 +79,12 @@ void ForcesSystem::run(World& w) {
         drho = w.fluid.store.get(comp::drho_dt);
         dt_raw = w.fluid.store.get(comp::dt_raw);
     }
+    const std::span<const Mat3> L =
+        m_corrected ? std::span<const Mat3>(w.fluid.store.get(comp::gradient_correction)) : std::span<const Mat3>{};
     const SteppingParams& stepping = w.scene.simulation.stepping;
-    // The mode is a template parameter so the `global`/`constant` loop carries no per-neighbour
-    // branches for the individual-only sums.
-    auto evaluate = [&]<bool Individual>(Index i) {
+    // The mode and the gradient form are template parameters, so the `global`/`constant` loop
+    // carries no per-neighbour branches for the individual-only sums or the correction.
+    auto evaluate = [&]<bool Individual, bool Corrected>(Index i) {
         const Vec3 xi = x[i], vi = v[i];
         const Real rhoi = rho[i];
         const Real pi = p[i] / (rhoi * rhoi);
@@ -90,7 +96,10 @@ void ForcesSystem::run(World& w) {
             const Vec3 grad = kernel.grad(xij, std::sqrt(r2));
             const Vec3 vij = vi - v[j];
             const Real visc = alpha > 0 ? monaghan_pi(vij.dot(xij), r2, alpha, c, h, rhoi, rho[j]) : Real(0);
-            a -= (m * (pi + p[j] / (rho[j] * rho[j]) + visc)) * grad;
+            if constexpr (Corrected)
+                a -= (m * (pi + p[j] / (rho[j] * rho[j]))) * (Real(0.5) * (L[i] + L[j]) * grad) + (m * visc) * grad;
+            else
+                a -= (m * (pi + p[j] / (rho[j] * rho[j]) + visc)) * grad;
             if constexpr (Individual) div += m * vij.dot(grad);
         }
         if (has_boundary) {
@@ -100,7 +109,10 @@ void ForcesSystem::run(World& w) {
                 const Vec3 grad = kernel.grad(xib, std::sqrt(r2));
                 const Vec3 vib = moving ? Vec3(vi - vel_b[b]) : vi;  // relative velocity v_i - v_b
                 const Real visc = alpha_b > 0 ? monaghan_pi(vib.dot(xib), r2, alpha_b, c, h, rhoi, rho0) : Real(0);
-                a -= (rho0 * vb[b] * (Real(2) * pi + visc)) * grad;
+                if constexpr (Corrected)
+                    a -= (rho0 * vb[b] * Real(2) * pi) * (L[i] * grad) + (rho0 * vb[b] * visc) * grad;
+                else
+                    a -= (rho0 * vb[b] * (Real(2) * pi + visc)) * grad;
                 if constexpr (Individual) div += rho0 * vb[b] * vib.dot(grad);  // He eq. 5, boundary term
             }
         }
@@ -114,7 +126,12 @@ void ForcesSystem::run(World& w) {
     };
     if (!m_individual) {
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 256), [&](const auto& r) {
-            for (std::size_t i = r.begin(); i < r.end(); ++i) evaluate.template operator()<false>(Index(i));
+            for (std::size_t i = r.begin(); i < r.end(); ++i) {
+                if (m_corrected)
+                    evaluate.template operator()<false, true>(Index(i));
+                else
+                    evaluate.template operator()<false, false>(Index(i));
+            }
         });
         w.step.force_evaluations = x.size();
         return;
@@ -127,7 +144,10 @@ void ForcesSystem::run(World& w) {
         tbb::blocked_range<std::size_t>(0, active.size(), 128), std::uint64_t(0),
         [&](const auto& r, std::uint64_t done) {
             for (std::size_t k = r.begin(); k < r.end(); ++k) {
-                evaluate.template operator()<true>(active[k]);
+                if (m_corrected)
+                    evaluate.template operator()<true, true>(active[k]);
+                else
+                    evaluate.template operator()<true, false>(active[k]);
                 t_last[active[k]] = now;
                 ++done;
             }

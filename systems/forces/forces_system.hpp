@@ -6,21 +6,28 @@
 /// and each also gets drho/dt (He eq. 5) and its raw step Delta t_i^raw (line 13).
 /// With moving boundaries (`moving_boundary`) the boundary velocity v_b enters the boundary
 /// viscosity and the boundary term of drho/dt as the relative velocity v_i - v_b.
+/// With `corrected` (scene `fluid.pressure_gradient`) the pressure terms use the corrected
+/// gradient (L_i + L_j)/2 grad W_ij against fluid and L_i grad W_ib against the boundary
+/// (Bonet & Lok 1999; L from GradientCorrectionSystem); viscosity keeps grad W.
 #include "engine/system.hpp"
 
 namespace sph {
 
 class ForcesSystem final : public System {
 public:
-    explicit ForcesSystem(bool with_boundary, bool individual = false, bool moving_boundary = false)
-        : m_with_boundary(with_boundary), m_individual(individual), m_moving_boundary(moving_boundary) {}
+    explicit ForcesSystem(bool with_boundary, bool individual = false, bool moving_boundary = false,
+                          bool corrected = false)
+        : m_with_boundary(with_boundary),
+          m_individual(individual),
+          m_moving_boundary(moving_boundary),
+          m_corrected(corrected) {}
     std::string name() const override { return "forces"; }
     Access access() const override;
     void register_components(World& w) override;
     void run(World& w) override;
 
 private:
-    bool m_with_boundary, m_individual, m_moving_boundary;
+    bool m_with_boundary, m_individual, m_moving_boundary, m_corrected;
 };
 
 }  // namespace sph

@@ -7,6 +7,7 @@
 #include "systems/boundary/boundary_volume_system.hpp"
 #include "systems/density/density_system.hpp"
 #include "systems/forces/forces_system.hpp"
+#include "systems/forces/gradient_correction_system.hpp"
 #include "systems/integrate/async_integration_system.hpp"
 #include "systems/integrate/symplectic_euler_system.hpp"
 #include "systems/metrics/step_stats_system.hpp"
@@ -32,7 +33,9 @@ Recipe make_wcsph_recipe(const Scene& scene) {
     if (boundary) r.step.push_back(std::make_unique<BoundaryNeighbourSystem>(individual));
     if (individual) r.step.push_back(std::make_unique<HaloSystem>(boundary));
     r.step.push_back(std::make_unique<DensitySystem>(boundary, individual));
-    r.step.push_back(std::make_unique<ForcesSystem>(boundary, individual, moving));
+    const bool corrected = scene.fluid.pressure_gradient == PressureGradient::Corrected;
+    if (corrected) r.step.push_back(std::make_unique<GradientCorrectionSystem>(boundary, individual));
+    r.step.push_back(std::make_unique<ForcesSystem>(boundary, individual, moving, corrected));
     r.step.push_back(std::make_unique<StepStatsSystem>(individual));
     if (individual) {
         r.step.push_back(std::make_unique<DtPropagationSystem>());

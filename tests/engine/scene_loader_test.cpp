@@ -134,8 +134,8 @@ TEST(SceneLoader, SuggestionsIgnoreCaseAndAllowTranspositions) {
     EXPECT_EQ(
         error_of([] { parse_scene(R"({"name": "t", "fluid": {"viscostiy": 0.1}})", "s.json"); }),
         "s.json: /fluid: found unknown key \"viscostiy\", expected one of: rest_density, "
-        "particle_radius, viscosity, speed_of_sound, density_fluctuation, surface_tension, boundary_viscosity (did you mean "
-        "\"viscosity\"?)");
+        "particle_radius, viscosity, speed_of_sound, density_fluctuation, surface_tension, boundary_viscosity, "
+        "pressure_gradient (did you mean \"viscosity\"?)");
 }
 
 // ---- (b) Valid scenes. ----

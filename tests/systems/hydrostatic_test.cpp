@@ -2,25 +2,29 @@
 // settling, the pressure at depth d must be rho0 g d (../shared/validation/
 // analytical_references.md, section 1; copied to data/validation/). The pressure is read by
 // the scene's probes (engine/probes.hpp): interpolated on the centre line at y = 0.3, 0.2 and
-// 0.1 m, averaged over the last third of the run (2-3 s, 50 samples: the tank keeps a slow
-// slosh that one snapshot would alias), with the depth measured from the free surface the
-// `surface` probe finds on the same line (the colour function's 0.5 level), averaged over the
-// same window. No particle may leave the tank.
+// 0.1 m, averaged over the last third of the run (2-3 s), with the depth measured from the free
+// surface the `surface` probe finds on the same line (the colour function's 0.5 level), averaged
+// over the same window. The test samples the probes at 1 kHz instead of the scene's 50 Hz, so
+// that the mean of a noisy mode has a small standard error. No particle may leave the tank.
 //
-// Tolerances. The issue asks for 2 % in every mode; the engine does not reach it, and these
-// bounds say what it does reach (measured 2026-11-23, depths 0.1 / 0.2 / 0.3 m):
-//   global      +1.2 / +2.9 / +3.8 %   asserted within 5 %, max density error < 3 %
-//   constant    +3.0 / +3.2 / +5.6 %   (dt = 0.4 ms; after 5-6 s: +1.8 / +2.5 / +4.1 %)
-//   individual  -3.1 / +4.4 / +8.3 %   (He's coefficients, no acoustic condition)
-// Every mode is held within 10 % and a max density error below 3 %, a regression bound (a
-// broken pressure, boundary or integrator misses it by far), not a claim of accuracy. The
-// excess grows faster than the depth: the discrete equilibrium of the symmetric SPH pressure
-// force (He eq. 4) with the cubic spline at h = 2 spacings on a settled, disordered particle
-// set is not the continuum's; a kernel-gradient correction (Bonet & Lok 1999) is the known
-// remedy (README, open items). `individual` as published lets resting particles sleep through
-// the acoustic waves that carry the pressure (no acoustic condition), hence its larger error.
+// The scene uses the corrected pressure gradient (fluid.pressure_gradient: corrected, Bonet &
+// Lok 1999). With He et al.'s symmetric eq. 4 the settled column carries 1-6 % more pressure
+// than its weight (README, Validation): the discrete equilibrium of the symmetric form on a
+// settled, disordered particle set is not the continuum's, and it does not improve with
+// resolution (+2.4 / +4.2 / +3.8 % at 8x the particles).
+//
+// Tolerances: the issue's 2 % for `constant` and `global` (measured 2026-11-23: constant
+// -1.5 / -0.0 / -0.1 %, global -1.9 / -1.1 / +0.9 % at depths 0.1 / 0.2 / 0.3 m; the runs are
+// deterministic, so these do not drift between CI runs). `individual` as published (He's
+// coefficients, no acoustic condition) lets resting particles sleep for up to dt_max while the
+// acoustic period is h / c_s = 1.4 ms; the extrapolated densities (He Alg. 2 line 9) then carry
+// pressure noise of 0.9-2 kPa RMS at a point, against a signal of 1-3 kPa. Its mean is held to
+// 2 % plus three standard errors of the 1 kHz samples (the samples are correlated, so the true
+// standard error is larger and the bound is the stricter for it); measured +1.6 / +3.9 / +4.1 %
+// with standard errors of 2.7 / 2.3 / 2.1 %.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <numeric>
 
 #include "engine/components.hpp"
@@ -32,13 +36,20 @@ using namespace sph;
 
 namespace {
 
-double mean_after(const ProbeSeries& s, const std::string& col, double t0) {
+struct Average {
+    double mean = 0, standard_error = 0;
+};
+
+/// Mean of a probe column over t >= t0, and its standard error sd / sqrt(n).
+Average mean_after(const ProbeSeries& s, const std::string& col, double t0) {
     const auto t = s.column("t"), v = s.column(col);
-    double sum = 0;
+    double sum = 0, sum2 = 0;
     int n = 0;
     for (std::size_t i = 0; i < t.size(); ++i)
-        if (t[i] >= t0 - 1e-9) sum += v[i], ++n;
-    return n ? sum / n : 0.0;
+        if (t[i] >= t0 - 1e-9) sum += v[i], sum2 += v[i] * v[i], ++n;
+    if (n == 0) return {};
+    const double mean = sum / n, var = std::max(0.0, sum2 / n - mean * mean);
+    return {mean, std::sqrt(var / n)};
 }
 
 std::vector<std::string> modes() {
@@ -58,8 +69,11 @@ std::vector<std::string> modes() {
 class HydrostaticTank : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(HydrostaticTank, PressureMatchesRhoGDepth) {
-    const Scene scene = load_scene(SPH_SOURCE_DIR "/scenes/hydrostatic_tank.json",
-                                   {{"/simulation/stepping/mode", GetParam()}, {"/simulation/frame_rate", 0}});
+    std::vector<std::pair<std::string, nlohmann::json>> overrides{{"/simulation/stepping/mode", GetParam()},
+                                                                   {"/simulation/frame_rate", 0}};
+    for (int k : {0, 1, 2, 6}) overrides.push_back({"/probes/" + std::to_string(k) + "/rate", 1000});
+    const Scene scene = load_scene(SPH_SOURCE_DIR "/scenes/hydrostatic_tank.json", overrides);
+    ASSERT_EQ(scene.fluid.pressure_gradient, PressureGradient::Corrected);
     auto sim = make_simulation(scene);
     ProbeSet probes(scene.probes);
     probes.sample_due(sim->world());
@@ -70,21 +84,19 @@ TEST_P(HydrostaticTank, PressureMatchesRhoGDepth) {
         if (s.time() >= t0) late_rho_err_max = std::max(late_rho_err_max, s.world().step.rho_err_max);
     });
     const double rho0 = scene.fluid.rest_density, g = 9.81;
-    const double surface = mean_after(probes.series("surface"), "y", t0);
+    const double surface = mean_after(probes.series("surface"), "y", t0).mean;
     std::printf("hydrostatic [%s]: %lld steps, free surface at y = %.4f m (0.4 m at the start)\n", GetParam().c_str(),
                 static_cast<long long>(sim->steps()), surface);
     for (const char* y : {"0.3", "0.2", "0.1"}) {
         const double depth = surface - std::stod(y), expect = rho0 * g * depth;
-        const double p = mean_after(probes.series(std::string("p_y") + y), "p", t0);
-        const double wall = mean_after(probes.series(std::string("wall_y") + y), "p", t0);
-        std::printf("hydrostatic [%s]: depth %.3f m  rho0 g d = %.1f Pa  interpolated %.1f Pa (%+.2f %%)  "
-                    "wall %.1f Pa (%+.2f %%)\n",
-                    GetParam().c_str(), depth, expect, p, 100 * (p - expect) / expect, wall,
-                    100 * (wall - expect) / expect);
-        EXPECT_NEAR(p, expect, 0.10 * expect) << "y = " << y << " m";
-        if (GetParam() == "global") {
-            EXPECT_NEAR(p, expect, 0.05 * expect) << "y = " << y << " m";
-        }
+        const Average p = mean_after(probes.series(std::string("p_y") + y), "p", t0);
+        const double wall = mean_after(probes.series(std::string("wall_y") + y), "p", t0).mean;
+        std::printf("hydrostatic [%s]: depth %.3f m  rho0 g d = %.1f Pa  interpolated %.1f Pa (%+.2f %%, standard "
+                    "error %.2f %%)  wall %.1f Pa (%+.2f %%)\n",
+                    GetParam().c_str(), depth, expect, p.mean, 100 * (p.mean - expect) / expect,
+                    100 * p.standard_error / expect, wall, 100 * (wall - expect) / expect);
+        const double tolerance = GetParam() == "individual" ? 0.02 * expect + 3 * p.standard_error : 0.02 * expect;
+        EXPECT_NEAR(p.mean, expect, tolerance) << "y = " << y << " m";
     }
     const auto x = sim->world().fluid.store.get(comp::position);
     const Aabb tank = scene.boundaries[0].box;
