@@ -5,7 +5,10 @@
 #include <tbb/parallel_for.h>
 
 #include <Eigen/Eigenvalues>
+#include <Eigen/LU>
 #include <algorithm>
+#include <cmath>
+#include <limits>
 
 #include "engine/components.hpp"
 #include "engine/world.hpp"
@@ -13,6 +16,13 @@
 namespace sph {
 
 Mat3 inverse_moment(const Mat3& moment, Real min_eigenvalue) {
+    // Gershgorin: every eigenvalue of the symmetric M is at least min_k (M_kk - sum_{l != k}
+    // |M_kl|). Inside the fluid M is close to the identity and this bound already clears the
+    // clamp, so the plain inverse (cofactors) is exact and the eigen-decomposition is skipped.
+    Real lower = std::numeric_limits<Real>::max();
+    for (int k = 0; k < 3; ++k)
+        lower = std::min(lower, moment(k, k) - (moment.row(k).cwiseAbs().sum() - std::abs(moment(k, k))));
+    if (lower >= min_eigenvalue) return moment.inverse();
     Eigen::SelfAdjointEigenSolver<Mat3> eig;
     eig.computeDirect(moment);
     Vec3 inv = eig.eigenvalues();

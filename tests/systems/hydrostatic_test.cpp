@@ -3,9 +3,10 @@
 // analytical_references.md, section 1; copied to data/validation/). The pressure is read by
 // the scene's probes (engine/probes.hpp): interpolated on the centre line at y = 0.3, 0.2 and
 // 0.1 m, averaged over the last third of the run (2-3 s), with the depth measured from the free
-// surface the `surface` probe finds on the same line (the colour function's 0.5 level), averaged
-// over the same window. The test samples the probes at 1 kHz instead of the scene's 50 Hz, so
-// that the mean of a noisy mode has a small standard error. No particle may leave the tank.
+// surface the height probes find (the colour function's 0.5 level), averaged over the same
+// window and over five lines (the centre line and four 6 cm from it in x and z). The test
+// samples the probes at 1 kHz instead of the scene's 50 Hz, so that the mean of a noisy mode
+// has a small standard error. No particle may leave the tank.
 //
 // The scene uses the corrected pressure gradient (fluid.pressure_gradient: corrected, Bonet &
 // Lok 1999). With He et al.'s symmetric eq. 4 the settled column carries 1-6 % more pressure
@@ -14,14 +15,15 @@
 // resolution (+2.4 / +4.2 / +3.8 % at 8x the particles).
 //
 // Tolerances: the 2 % for `constant` and `global` (measured 2026-11-23: constant
-// -1.5 / -0.0 / -0.1 %, global -1.9 / -1.1 / +0.9 % at depths 0.1 / 0.2 / 0.3 m; the runs are
-// deterministic, so these do not drift between CI runs). `individual` as published (He's
+// -0.6 / -0.2 / -0.2 %, global -1.0 / +0.2 / +1.6 % at depths 0.1 / 0.2 / 0.3 m; the runs are
+// deterministic, so these do not drift between CI runs of one build; a change anywhere in the
+// arithmetic moves them by up to about 1 % at the shallowest probe, through the settled surface). `individual` as published (He's
 // coefficients, no acoustic condition) lets resting particles sleep for up to dt_max while the
 // acoustic period is h / c_s = 1.4 ms; the extrapolated densities (He Alg. 2 line 9) then carry
 // pressure noise of 0.9-2 kPa RMS at a point, against a signal of 1-3 kPa. Its mean is held to
 // 2 % plus three standard errors of the 1 kHz samples (the samples are correlated, so the true
-// standard error is larger and the bound is the stricter for it); measured +1.6 / +3.9 / +4.1 %
-// with standard errors of 2.7 / 2.3 / 2.1 %.
+// standard error is larger and the bound is the stricter for it); measured +3.7 / +5.9 / +6.2 %
+// with standard errors of 3.1 / 2.7 / 2.2 %: it reads high, and does not meet 2 %.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -71,7 +73,7 @@ class HydrostaticTank : public ::testing::TestWithParam<std::string> {};
 TEST_P(HydrostaticTank, PressureMatchesRhoGDepth) {
     std::vector<std::pair<std::string, nlohmann::json>> overrides{{"/simulation/stepping/mode", GetParam()},
                                                                    {"/simulation/frame_rate", 0}};
-    for (int k : {0, 1, 2, 6}) overrides.push_back({"/probes/" + std::to_string(k) + "/rate", 1000});
+    for (int k : {0, 1, 2, 6, 7, 8, 9, 10}) overrides.push_back({"/probes/" + std::to_string(k) + "/rate", 1000});
     const Scene scene = load_scene(SPH_SOURCE_DIR "/scenes/hydrostatic_tank.json", overrides);
     ASSERT_EQ(scene.fluid.pressure_gradient, PressureGradient::Corrected);
     auto sim = make_simulation(scene);
@@ -84,7 +86,12 @@ TEST_P(HydrostaticTank, PressureMatchesRhoGDepth) {
         if (s.time() >= t0) late_rho_err_max = std::max(late_rho_err_max, s.world().step.rho_err_max);
     });
     const double rho0 = scene.fluid.rest_density, g = 9.81;
-    const double surface = mean_after(probes.series("surface"), "y", t0).mean;
+    // The free surface is flat at rest: its level is the mean of the five height lines (the
+    // centre line alone reads up to 2 mm high when a top-layer particle sits on it, and 2 mm
+    // is 2 % of the shallowest depth).
+    double surface = 0;
+    for (const char* name : {"surface", "surface_a", "surface_b", "surface_c", "surface_d"})
+        surface += mean_after(probes.series(name), "y", t0).mean / 5;
     std::printf("hydrostatic [%s]: %lld steps, free surface at y = %.4f m (0.4 m at the start)\n", GetParam().c_str(),
                 static_cast<long long>(sim->steps()), surface);
     for (const char* y : {"0.3", "0.2", "0.1"}) {
