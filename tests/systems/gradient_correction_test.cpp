@@ -98,6 +98,14 @@ TEST(GradientCorrection, InverseMomentInvertsAndClamps) {
     // Without clamping it is the plain inverse.
     const Mat3 full = inverse_moment(m.cast<Real>(), Real(0.1));
     EXPECT_LT((full.cast<double>() * m - Eigen::Matrix3d::Identity()).norm(), 1e-5);
+    // Near the identity (an interior particle) the Gershgorin bound clears the clamp and the
+    // cofactor inverse is taken instead of the eigen-decomposition: the same matrix.
+    Eigen::Matrix3d near = Eigen::Matrix3d::Identity();
+    near(0, 1) = near(1, 0) = 0.03;
+    near(1, 2) = near(2, 1) = -0.05;
+    near(0, 0) = 0.97;
+    const Mat3 fast = inverse_moment(near.cast<Real>());
+    EXPECT_LT((fast.cast<double>() - near.inverse()).norm(), 1e-5);
 }
 
 TEST(GradientCorrection, MatricesMatchBruteForce) {
