@@ -9,7 +9,7 @@
 // has a small standard error. No particle may leave the tank.
 //
 // The scene uses the corrected pressure gradient (fluid.pressure_gradient: corrected, Bonet &
-// Lok 1999). With He et al.'s symmetric eq. 4 the settled column carries 1-6 % more pressure
+// Lok 1999). With He et al.'s symmetric eq. 4 the settled column carries 2-6 % more pressure
 // than its weight (README, Validation): the discrete equilibrium of the symmetric form on a
 // settled, disordered particle set is not the continuum's, and it does not improve with
 // resolution (+2.4 / +4.2 / +3.8 % at 8x the particles).
