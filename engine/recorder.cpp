@@ -173,6 +173,8 @@ nlohmann::json Recorder::finish(const Simulation& sim, double wall_seconds, int 
     j["scene"] = w.scene.name;
     j["method"] = to_string(w.scene.simulation.method);
     j["stepping"] = to_string(w.scene.simulation.stepping.mode);
+    if (w.scene.simulation.stepping.mode == SteppingMode::Individual)
+        j["activation"] = to_string(w.scene.simulation.stepping.activation);
     j["fluid_particles"] = w.fluid.size();
     j["boundary_particles"] = w.boundary.size();
     j["simulated_time_s"] = sim.time();

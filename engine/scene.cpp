@@ -70,6 +70,16 @@ const char* to_string(PressureGradient g) {
     return "unknown";
 }
 
+const char* to_string(Activation a) {
+    switch (a) {
+        case Activation::Deadline:
+            return "deadline";
+        case Activation::Paper:
+            return "paper";
+    }
+    return "unknown";
+}
+
 const char* to_string(SteppingMode m) {
     switch (m) {
         case SteppingMode::Constant:
@@ -188,8 +198,8 @@ constexpr std::array<const char*, 6> k_pcisph_keys{"iterations", "max_iterations
 constexpr std::array<const char*, 2> k_boundary_params_keys{"handling", "friction"};
 constexpr std::array<const char*, 7> k_simulation_keys{
     "method", "stepping", "end_time", "frame_rate", "scale", "gravity", "sort_interval"};
-constexpr std::array<const char*, 8> k_stepping_keys{"mode",     "dt",       "lambda_v", "lambda_f",
-                                                     "acoustic", "lambda_c", "dt_max",   "dt_min"};
+constexpr std::array<const char*, 9> k_stepping_keys{"mode",     "dt",       "lambda_v", "lambda_f", "acoustic",
+                                                     "lambda_c", "dt_max",   "dt_min",   "activation"};
 constexpr std::array<const char*, 8> k_fluid_keys{"rest_density",        "particle_radius", "viscosity",
                                                   "speed_of_sound",      "density_fluctuation",
                                                   "surface_tension",     "boundary_viscosity",
@@ -219,6 +229,7 @@ constexpr std::array<PcisphLoop, 2> k_loops{PcisphLoop::Fixed, PcisphLoop::Until
 constexpr std::array<BoundaryHandling, 2> k_handlings{BoundaryHandling::Ihmsen,
                                                       BoundaryHandling::DirectForcing};
 constexpr std::array<PressureGradient, 2> k_gradients{PressureGradient::Symmetric, PressureGradient::Corrected};
+constexpr std::array<Activation, 2> k_activations{Activation::Deadline, Activation::Paper};
 constexpr std::array<BoundaryShape, 6> k_shapes{BoundaryShape::Container, BoundaryShape::Box,
                                                 BoundaryShape::Sphere,    BoundaryShape::Cylinder,
                                                 BoundaryShape::Heightfield, BoundaryShape::Mesh};
@@ -1017,6 +1028,7 @@ class Reader {
         read_number(n, "lambda_c", coefficient(), p.lambda_c);
         read_number(n, "dt_max", positive("seconds"), p.dt_max);
         read_number(n, "dt_min", positive("seconds"), p.dt_min);
+        if (const json* v = n.find("activation")) p.activation = pick_enum(n.at(*v, "activation"), k_activations);
         if (!(p.dt_min < p.dt_max)) {
             const std::string min_path = child(n.path, "dt_min");
             fail_at(min_path, n.find("dt_min") ? dump(*n.find("dt_min")) : fmt_num(p.dt_min),

@@ -44,6 +44,14 @@ enum class BoundaryHandling { Ihmsen, DirectForcing };
 /// makes the force first-order consistent while keeping it antisymmetric (momentum conserved)
 /// and repulsive (systems/forces/gradient_correction_system.hpp).
 enum class PressureGradient { Symmetric, Corrected };
+/// When `individual` evaluates a particle whose deadline t_last + Delta t_i is near (the rule
+/// behind He et al. Alg. 2 line 2). `deadline`: at the last step that starts before the
+/// deadline, and no step is longer than the earliest deadline it would carry an inactive
+/// particle past; so no particle holds its force for longer than its Delta t_i. `paper`: at the
+/// first step that starts at or after the deadline (He: t_last + Delta t_i < t_sim, tie counted
+/// as active); a particle then holds its force for up to Delta t_i + Delta t_sim, almost twice
+/// its step when the two are close. systems/active/select_active_system.hpp.
+enum class Activation { Deadline, Paper };
 
 /// @brief Names as written in scene files and on the command line.
 const char* to_string(Method m);
@@ -51,6 +59,7 @@ const char* to_string(SteppingMode m);
 const char* to_string(PcisphLoop l);
 const char* to_string(BoundaryHandling b);
 const char* to_string(PressureGradient g);
+const char* to_string(Activation a);
 /// @brief Every method and every stepping mode the loader knows, by name (sph-run --list-modes;
 /// the study tool runs each pair a scene accepts, so a new mode joins it with no new code).
 std::vector<std::string> method_names();
@@ -67,6 +76,7 @@ struct SteppingParams {
     double lambda_c = 0.4;     ///< Acoustic (sound-speed CFL) coefficient.
     double dt_max = 5e-3;      ///< s; upper bound on any step.
     double dt_min = 1e-7;      ///< s; a step below this stops the run with a diagnosis.
+    Activation activation = Activation::Deadline;  ///< `individual` only (see Activation).
 };
 
 /// @brief PCISPH (Solenthaler & Pajarola 2009; Ihmsen et al. 2010 Alg. 2) and its adaptive step.

@@ -100,6 +100,20 @@ struct StepState {
     /// @brief Sets the step to at most `seconds` and never past t_stop (the run's end).
     void set_dt_clipped(double seconds) {
         set_dt(seconds);
+        clip_to_stop();
+    }
+    /// @brief As set_dt_clipped, also at most `cap` ticks (exact: no round trip through seconds).
+    void set_dt_clipped(double seconds, Tick cap) {
+        set_dt(seconds);
+        if (cap >= 1 && cap < dt_ticks) {
+            dt_ticks = cap;
+            dt = to_seconds(dt_ticks);
+        }
+        clip_to_stop();
+    }
+
+private:
+    void clip_to_stop() {
         if (std::isfinite(t_stop)) {
             const Tick left = to_ticks(t_stop + 0.5 * kSecondsPerTick) - t_ticks;
             if (left > 0 && left < dt_ticks) {

@@ -32,6 +32,14 @@ void SelectActiveSystem::run(World& w) {
     auto wake = w.fluid.store.get(comp::wake);
     const auto x = w.fluid.store.get(comp::position);
     const Tick now = w.step.t_ticks;
+    // The deadline rule (scene key simulation.stepping.activation, default): evaluate a particle
+    // at the last step that starts before its deadline t_last + Delta t_i, predicting this step's
+    // length by the last stable Delta t_sim (IndividualGlobalDtSystem then keeps the step from
+    // carrying anyone past a deadline). He's rule as written (`paper`) evaluates at the first
+    // step that starts at or after the deadline: ahead = one tick.
+    const Tick ahead = w.scene.simulation.stepping.activation == Activation::Deadline
+                           ? std::max<Tick>(1, to_ticks(w.step.dt_stable))
+                           : Tick(1);
     const std::size_t n = t_last.size();
     const Real h = w.physics.h;
     const auto& bodies = w.moving_bodies;
@@ -49,9 +57,10 @@ void SelectActiveSystem::run(World& w) {
     };
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const auto& r) {
         for (std::size_t i = r.begin(); i < r.end(); ++i) {
-            // He Alg. 2 line 2 with the tie counted as active (the paper writes "<"; with "<"
-            // a particle whose Delta t_i equals Delta t_sim would wait two steps).
-            active[i] = (t_last[i] + to_ticks(dt[i]) <= now) || wake[i] || (!bodies.empty() && near_moving_body(i));
+            // He Alg. 2 line 2. `paper`: deadline <= now, the tie counted as active (the paper
+            // writes "<"; with "<" a particle whose Delta t_i equals Delta t_sim would wait two
+            // steps). `deadline`: deadline < now + ahead.
+            active[i] = (t_last[i] + to_ticks(dt[i]) < now + ahead) || wake[i] || (!bodies.empty() && near_moving_body(i));
             wake[i] = 0;
         }
     });

@@ -1,10 +1,18 @@
 #pragma once
 /// @file select_active_system.hpp
-/// @brief He et al. Alg. 2 line 2 (select active). Particle i is active at simulated time t
-/// when t_last_i + Delta t_i <= t, compared in integer ticks (exact; the tie counts as
-/// active), or when a system woke it (a wall contact since its last evaluation).
-/// Delta t_i is converted to ticks rounding down, the same way the global step is, so the
-/// particle that sets Delta t_sim is active exactly one step later.
+/// @brief He et al. Alg. 2 line 2 (select active), compared in integer ticks (exact). With
+/// `simulation.stepping.activation: deadline` (the default) particle i is active at simulated
+/// time t when its deadline t_last_i + Delta t_i falls before t + Delta t_sim', where
+/// Delta t_sim' is the last step's stable Delta t_sim (min_j Delta t_j): it is evaluated at the
+/// last step that starts before its deadline, and IndividualGlobalDtSystem keeps the step from
+/// running past the deadline of anyone left inactive. So no particle holds its acceleration
+/// for longer than its Delta t_i (He Alg. 2 lines 19-21 extrapolate with it). With `paper` it
+/// is active when t_last_i + Delta t_i <= t (He's "<", the tie counted as active): it waits
+/// for the first step that starts at or after its deadline and holds its acceleration for up
+/// to Delta t_i + Delta t_sim, almost 2 Delta t_i when its step is close to Delta t_sim; README,
+/// "Activation", measures what that costs. Either way a particle is also active when a
+/// system woke it (a wall contact since its last evaluation). Delta t_i is converted to ticks
+/// rounding down, the same way the global step is.
 #include <cstdint>
 #include <vector>
 

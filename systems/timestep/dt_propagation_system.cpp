@@ -55,20 +55,51 @@ void DtPropagationSystem::run(World& w) {
     w.step.propagation_updates = n;
 }
 
-Access IndividualGlobalDtSystem::access() const { return {{res::fluid(comp::dt.name)}, {res::dt}}; }
+Access IndividualGlobalDtSystem::access() const {
+    return {{res::fluid(comp::dt.name), res::fluid(comp::t_last.name), res::fluid(comp::active.name)}, {res::dt}};
+}
+
+void IndividualGlobalDtSystem::register_components(World& w) {
+    w.fluid.store.add(comp::dt);
+    w.fluid.store.add(comp::t_last);
+    w.fluid.store.add(comp::active);
+}
 
 void IndividualGlobalDtSystem::run(World& w) {
     const auto dt = w.fluid.store.get(comp::dt);
-    const double m = tbb::parallel_reduce(
-        tbb::blocked_range<std::size_t>(0, dt.size(), 8192), w.scene.simulation.stepping.dt_max,
-        [&](const auto& r, double best) {
-            for (std::size_t i = r.begin(); i < r.end(); ++i) best = std::min(best, dt[i]);
+    const auto t_last = w.fluid.store.get(comp::t_last);
+    const auto active = w.fluid.store.get(comp::active);
+    StepState& s = w.step;
+    const Tick now = s.t_ticks;
+    const bool deadline = w.scene.simulation.stepping.activation == Activation::Deadline;
+    struct Min {
+        double dt;         // line 17: min_i Delta t_i
+        Tick next;         // the earliest deadline of an inactive particle that is still ahead
+    };
+    const Min none{w.scene.simulation.stepping.dt_max, std::numeric_limits<Tick>::max()};
+    const Min m = tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, dt.size(), 8192), none,
+        [&](const auto& r, Min best) {
+            for (std::size_t i = r.begin(); i < r.end(); ++i) {
+                best.dt = std::min(best.dt, dt[i]);
+                if (deadline && !active[i]) {
+                    const Tick due = t_last[i] + to_ticks(dt[i]);
+                    if (due > now) best.next = std::min(best.next, due);
+                }
+            }
             return best;
         },
-        [](double a, double b) { return std::min(a, b); });
-    StepState& s = w.step;
-    s.dt_stable = m;
-    s.set_dt_clipped(m);
+        [](Min a, Min b) { return Min{std::min(a.dt, b.dt), std::min(a.next, b.next)}; });
+    // The deadline rule: the selection left inactive only particles due at or after
+    // now + Delta t_sim' (the last stable step), so a step that stops at the earliest such
+    // deadline is never shorter than min(Delta t_sim, Delta t_sim'). A propagated Delta t_i
+    // (line 16) can move a halo particle's deadline closer; the floor Delta t_sim' then keeps
+    // the step from fragmenting, and that particle is evaluated at the next step.
+    Tick cap = 0;  // none
+    if (deadline && m.next != std::numeric_limits<Tick>::max())
+        cap = std::max(m.next - now, std::max<Tick>(1, to_ticks(s.dt_stable)));
+    s.dt_stable = m.dt;
+    s.set_dt_clipped(m.dt, cap);
 }
 
 }  // namespace sph

@@ -147,7 +147,7 @@ TEST(SceneLoader, CompleteSceneParsesEveryField) {
       "simulation": {
         "method": "wcsph",
         "stepping": {"mode": "constant", "dt": 0.0002, "lambda_v": 0.3, "lambda_f": 0.2,
-                     "acoustic": false, "lambda_c": 0.5, "dt_max": 0.002, "dt_min": 1e-6},
+                     "acoustic": false, "lambda_c": 0.5, "dt_max": 0.002, "dt_min": 1e-6, "activation": "paper"},
         "end_time": 2.5, "frame_rate": 0, "scale": 8, "gravity": [0, 0, -9.8], "sort_interval": 4
       },
       "domain": {"min": [-0.5, -0.5, -0.5], "max": [2.5, 1.5, 1.5]},
@@ -177,6 +177,7 @@ TEST(SceneLoader, CompleteSceneParsesEveryField) {
     EXPECT_DOUBLE_EQ(s.simulation.stepping.lambda_c, 0.5);
     EXPECT_DOUBLE_EQ(s.simulation.stepping.dt_max, 2e-3);
     EXPECT_DOUBLE_EQ(s.simulation.stepping.dt_min, 1e-6);
+    EXPECT_EQ(s.simulation.stepping.activation, Activation::Paper);
     EXPECT_DOUBLE_EQ(s.simulation.end_time, 2.5);
     EXPECT_DOUBLE_EQ(s.simulation.frame_rate, 0.0);
     EXPECT_DOUBLE_EQ(s.simulation.scale, 8.0);
@@ -233,6 +234,7 @@ TEST(SceneLoader, MissingSectionsTakeTheStructDefaults) {
     EXPECT_EQ(s.simulation.stepping.lambda_c, d.simulation.stepping.lambda_c);
     EXPECT_EQ(s.simulation.stepping.dt_max, d.simulation.stepping.dt_max);
     EXPECT_EQ(s.simulation.stepping.dt_min, d.simulation.stepping.dt_min);
+    EXPECT_EQ(s.simulation.stepping.activation, Activation::Deadline);
     EXPECT_EQ(s.simulation.end_time, 1.0);
     EXPECT_EQ(s.simulation.frame_rate, 30.0);
     EXPECT_EQ(s.simulation.scale, 1.0);
