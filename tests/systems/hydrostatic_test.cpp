@@ -23,8 +23,9 @@
 // pressure carries 200-240 Pa RMS of noise at 1 kHz (against 11-25 Pa in `global`). Its mean is
 // held to 2 % plus three standard errors of the 1 kHz samples (the samples are correlated, so
 // the true standard error is larger and the bound is the stricter for it); measured
-// 2026-11-24: -2.01 / -0.82 / +0.69 % with standard errors of 0.66 / 0.33 / 0.26 %, i.e. at
-// the 2 % limit at the shallowest probe. With He's activation rule as written (`paper`), under
+// 2026-11-24: +0.21 / -0.22 / +0.25 % with standard errors of 0.55 / 0.31 / 0.20 %. A build
+// that differed only in rounding the step cap to whole ticks read -2.01 / -0.82 / +0.69 %: the
+// settled surface moved by 0.6 mm, which is 0.6 % at the shallowest probe. With He's activation rule as written (`paper`), under
 // which a particle holds its acceleration for up to twice its step, it read +3.7 / +5.9 / +6.2 %
 // with 0.9-2 kPa of noise (README, "Activation").
 #include <gtest/gtest.h>
