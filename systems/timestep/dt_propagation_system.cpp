@@ -73,8 +73,8 @@ void IndividualGlobalDtSystem::run(World& w) {
     const Tick now = s.t_ticks;
     const bool deadline = w.scene.simulation.stepping.activation == Activation::Deadline;
     struct Min {
-        double dt;         // line 17: min_i Delta t_i
-        Tick next;         // the earliest deadline of an inactive particle that is still ahead
+        double dt;  // line 17: min_i Delta t_i
+        Tick next;  // the earliest deadline of an inactive particle that is still ahead
     };
     const Min none{w.scene.simulation.stepping.dt_max, std::numeric_limits<Tick>::max()};
     const Min m = tbb::parallel_reduce(
