@@ -58,6 +58,9 @@ struct Pipeline {
         }
         w->step.t_ticks = now;
         w->step.t = to_seconds(now);
+        // The deadline rule (select_active_system.hpp) looks one last stable step ahead: with
+        // it at 1e-4 s the particles just evaluated (due at now + 1e-4 s) stay asleep.
+        w->step.dt_stable = 1e-4;
         for (auto& s : systems) s->run(*w);
     }
     System& get(const std::string& name) {
