@@ -40,3 +40,22 @@ if pairs:
         t1, t2 = by_name[a]["real_time"], by_name[b]["real_time"]
         unit = by_name[a].get("time_unit", "ns")
         print(f"| `{a.replace('/threads:1', '')}` | {t1:.3g} {unit} | {t2:.3g} {unit} | {t1 / t2:.2f}× |")
+
+# Individual stepping (He et al. Alg. 2) by active share, from the same run: one row per system
+# and particle count, one column per share (BM_Individual_<system>/<N>/<active per mille>), and
+# the cost at 10 % relative to 100 % (1.0 = does not scale with the active set, 0.1 = in proportion).
+shares = {}
+for name, b in by_name.items():
+    m = re.fullmatch(r"BM_Individual_(\w+)/(\d+)/(\d+)", name)
+    if m:
+        shares.setdefault((m.group(1), int(m.group(2))), {})[int(m.group(3))] = b
+if shares:
+    cols = sorted({a for row in shares.values() for a in row}, reverse=True)
+    print("\n| individual system | particles | " + " | ".join(f"{a / 10:g} % active" for a in cols) +
+          " | 10 % / 100 % |")
+    print("|---|---|" + "---|" * len(cols) + "---|")
+    for (system, n), row in sorted(shares.items(), key=lambda kv: (kv[0][1], kv[0][0])):
+        unit = next(iter(row.values())).get("time_unit", "ns")
+        cells = [f"{row[a]['real_time']:.3g} {unit}" if a in row else "" for a in cols]
+        ratio = f"{row[100]['real_time'] / row[1000]['real_time']:.2f}" if 100 in row and 1000 in row else ""
+        print(f"| `{system}` | {n:,} | " + " | ".join(cells) + f" | {ratio} |")

@@ -60,8 +60,11 @@ TOP_KEYS = {"name", "description", "simulation", "domain", "fluid", "fluid_block
 HERE = pathlib.Path(__file__).resolve().parent
 
 
+PROG = "sph-study"  # the name errors are reported under; tools importing this module set their own
+
+
 def fail(msg):
-    print(f"sph-study: error: {msg}", file=sys.stderr)
+    print(f"{PROG}: error: {msg}", file=sys.stderr)
     sys.exit(2)
 
 
@@ -293,25 +296,47 @@ def deviation(run, ref):
     return rms, (rms / span if span > 0 else float("nan"))
 
 
-def experiment_error(run_dir, probe, scene_dir):
+def experiment_series(run_dir, probe, scene_dir):
+    """A probe with an `experiment` object, made dimensionless as the experiment is: returns
+    (T, Z) of the run and (te, ze) of the measured data."""
     e = probe["experiment"]
-    name = probe.get("name")
-    d = read_csv(pathlib.Path(run_dir) / "probes" / f"{name}.csv")
+    d = read_csv(pathlib.Path(run_dir) / "probes" / f"{probe.get('name')}.csv")
     col = {"fluid": "kinetic", "pressure": "p", "height": "height"}.get(probe["type"], "front")
     T = d["t"] * e.get("t_scale", 1.0)
     Z = (d[col] - e.get("value_offset", 0.0)) * e.get("value_scale", 1.0)
     x = read_csv(scene_dir / e["file"])
     keys = [k for k in x.keys() if k not in ("a_in",)]
-    te, ze = x[keys[0]], x[keys[1]]
-    lo, hi = e.get("t_range", [-1e300, 1e300])
-    sel = (te >= lo) & (te <= hi) & (te - e.get("max_shift", 0.0) <= T[-1])
-    best = (float("inf"), 0.0)
-    n = int(round(e.get("max_shift", 0.0) / 0.005))
+    return T, Z, x[keys[0]], x[keys[1]]
+
+
+def shifted_error(T, Z, te, ze, t_range, max_shift, points_shift=None):
+    """RMS relative error of Z(T) against (te, ze), minimised over one time shift |dT| <= max_shift
+    in steps of 0.005: returns (error, shift), or (nan, 0) if no shift fits. The measured points
+    are those in t_range that the run reaches at a shift of points_shift (default max_shift), so
+    that a wider search compares the same points; shifts that would need the run beyond its
+    first or last sample are skipped, never extrapolated."""
+    lo, hi = t_range
+    ps = max_shift if points_shift is None else points_shift
+    sel = (te >= lo) & (te <= hi) & (te - ps <= T[-1])
+    best = (float("nan"), 0.0)
+    if not sel.any():
+        return best
+    n = int(round(max_shift / 0.005))
     for k in range(-n, n + 1):
         shift = 0.005 * k
-        err = (np.interp(te[sel] - shift, T, Z) - ze[sel]) / ze[sel]
-        best = min(best, (float(np.sqrt(np.mean(err ** 2))), shift))
+        t = te[sel] - shift
+        if t.max() > T[-1] + 1e-12 or t.min() < T[0] - 1e-12:
+            continue
+        err = float(np.sqrt(np.mean(((np.interp(t, T, Z) - ze[sel]) / ze[sel]) ** 2)))
+        if not err >= best[0]:  # also replaces the initial nan
+            best = (err, shift)
     return best
+
+
+def experiment_error(run_dir, probe, scene_dir):
+    e = probe["experiment"]
+    T, Z, te, ze = experiment_series(run_dir, probe, scene_dir)
+    return shifted_error(T, Z, te, ze, e.get("t_range", [-1e300, 1e300]), e.get("max_shift", 0.0))
 
 
 def pareto_front(points):

@@ -1,0 +1,242 @@
+#!/usr/bin/python3
+"""resolution_study: how a scene's error against its experiment changes with the particle
+spacing, and how much of it is run-to-run scatter.
+
+usage: tools/resolution_study.py SCENE.json [--refine 0.5,0.75,1,1.5] [--runs 6]
+           [--perturb simulation.stepping.lambda_c=0.36:0.44] [--mode global] [--set KEY=VALUE ...]
+           [--end T] [--threads 2] [--free-shift 1.0] [--out out/resolution/<scene>]
+           [--sph-run build/tools/sph-run]
+
+For every refinement factor f (the spacing is the scene's divided by f, so the particle count
+is multiplied by f^3) it runs the scene --runs times with sph-run, one run after another,
+with the --perturb key spread evenly over its range (by default the acoustic CFL coefficient
+lambda_c over 0.4 +- 10 %, which changes the step sequence and nothing in the model). A free
+surface flow is chaotic at the scale of a particle, so one run per resolution cannot tell a
+trend from scatter; the spread of the perturbed runs measures the scatter.
+
+For every probe with an `experiment` object (scenes/README.md) it writes, per resolution:
+  * the error of each run against the experiment (RMS relative over t_range with one time
+    shift |dT| <= max_shift, as sph-study computes it): median, minimum, maximum;
+  * the error of the runs' mean curve, its shift, and the best shift when it may reach
+    --free-shift (a lead or lag the bounded shift cannot absorb shows as a shift at the bound);
+  * the scatter: RMS over t_range of the runs' standard deviation relative to their mean;
+  * the change from the next coarser resolution: RMS relative difference of the mean curves
+    over t_range, no shift (a discretisation that converges makes these fall geometrically);
+  * the largest absolute deviation from the measured points in t_range, no shift, per run:
+    median, minimum, maximum (the Martin & Moyce residual-height criterion, |d eta| <= 0.05).
+
+Outputs in --out: resolution.md, resolution.csv, resolution.png (error against spacing and
+the mean curves against the data), and every run's folder f<f>/run<k>/.
+"""
+import argparse
+import csv
+import datetime
+import json
+import pathlib
+import subprocess
+import sys
+import time
+
+import numpy as np
+
+HERE = pathlib.Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+import sph_study  # noqa: E402
+from sph_study import experiment_series, fail, full_key, machine, shifted_error, source_commit  # noqa: E402
+
+sph_study.PROG = "resolution_study"
+
+
+def parse_perturb(spec):
+    key, _, rng = spec.partition("=")
+    lo, _, hi = rng.partition(":")
+    try:
+        return full_key(key.strip()), float(lo), float(hi)
+    except ValueError:
+        fail(f"--perturb '{spec}': expected KEY=LOW:HIGH, e.g. simulation.stepping.lambda_c=0.36:0.44")
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("scene")
+    ap.add_argument("--refine", default="0.5,0.75,1,1.5",
+                    help="linear refinement factors; spacing = scene spacing / f (default 0.5,0.75,1,1.5)")
+    ap.add_argument("--runs", type=int, default=6, help="perturbed runs per resolution (default 6)")
+    ap.add_argument("--perturb", default="simulation.stepping.lambda_c=0.36:0.44",
+                    help="KEY=LOW:HIGH spread over the runs (default simulation.stepping.lambda_c=0.36:0.44)")
+    ap.add_argument("--mode", help="stepping mode (default: the scene's)")
+    ap.add_argument("--set", action="append", default=[], help="override for every run")
+    ap.add_argument("--end", type=float, help="simulated seconds (default: the scene's end_time)")
+    ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--free-shift", type=float, default=1.0, help="largest |dT| of the unbounded shift (default 1)")
+    ap.add_argument("--out", help="output folder (default out/resolution/<scene name>)")
+    ap.add_argument("--sph-run", default=str(HERE.parent / "build" / "tools" / "sph-run"))
+    args = ap.parse_args()
+
+    scene_path = pathlib.Path(args.scene)
+    try:
+        scene = json.loads(scene_path.read_text())
+    except (OSError, ValueError) as e:
+        fail(f"{scene_path}: {e}")
+    probes = [p for p in scene.get("probes", []) if isinstance(p, dict) and "experiment" in p]
+    if not probes:
+        fail(f"{scene_path}: no probe has an `experiment` object; nothing to compare")
+    try:
+        factors = [float(f) for f in args.refine.split(",")]
+    except ValueError:
+        fail(f"--refine '{args.refine}': expected comma-separated positive numbers, e.g. 0.5,1,1.5")
+    if any(not f > 0 for f in factors):
+        fail(f"--refine '{args.refine}': every factor must be > 0")
+    if args.runs < 1:
+        fail(f"--runs {args.runs}: expected at least 1")
+    factors.sort()
+    key, lo, hi = parse_perturb(args.perturb)
+    values = [0.5 * (lo + hi)] if args.runs == 1 else list(np.linspace(lo, hi, args.runs))
+    base_scale = float(scene.get("simulation", {}).get("scale", 1.0))
+    out = pathlib.Path(args.out or f"out/resolution/{scene.get('name', scene_path.stem)}")
+    out.mkdir(parents=True, exist_ok=True)
+    sph_run = pathlib.Path(args.sph_run)
+    if not sph_run.exists():
+        fail(f"{sph_run}: not found (build the project first, or pass --sph-run)")
+
+    started = time.time()
+    runs = {}  # factor -> list of (run dir, summary)
+    total = len(factors) * len(values)
+    for fi, f in enumerate(factors):
+        runs[f] = []
+        for k, v in enumerate(values):
+            d = out / f"f{f:g}" / f"run{k}"
+            cmd = [str(sph_run), str(scene_path), "--scale", repr(base_scale * f ** 3), "--threads",
+                   str(args.threads), "--no-frames", "-q", "--out", str(d), "--set", f"{key}={v!r}"]
+            if args.mode:
+                cmd += ["--mode", args.mode]
+            if args.end is not None:
+                cmd += ["--end", repr(args.end)]
+            for s in args.set:
+                cmd += ["--set", full_key(s)]
+            n = fi * len(values) + k + 1
+            print(f"[{n}/{total}] refine {f:g}, {key} = {v:.4g} ...", end=" ", flush=True)
+            t0 = time.time()
+            r = subprocess.run(cmd, capture_output=True, text=True)
+            if r.returncode != 0:
+                fail(f"run failed ({' '.join(cmd)}):\n{r.stderr.strip()}")
+            summary = json.loads((d / "summary.json").read_text())
+            print(f"{summary['fluid_particles']:,} particles, {summary['kept_steps']:,} steps, "
+                  f"{time.time() - t0:.1f} s", flush=True)
+            runs[f].append((d, summary))
+
+    rows = []
+    curves = {}  # (probe, factor) -> (T grid, mean Z, per-run Z)
+    for p in probes:
+        e = p["experiment"]
+        t_range = e.get("t_range", [-1e300, 1e300])
+        max_shift = e.get("max_shift", 0.0)
+        prev = None
+        for f in factors:
+            series = [experiment_series(d, p, scene_path.parent) for d, _ in runs[f]]
+            te, ze = series[0][2], series[0][3]
+            t_end = min(s[0][-1] for s in series)
+            grid = np.linspace(max(s[0][0] for s in series), t_end, 2000)
+            zs = np.array([np.interp(grid, s[0], s[1]) for s in series])
+            mean = zs.mean(axis=0)
+            curves[(p["name"], f)] = (grid, mean, zs)
+            per_run = [shifted_error(s[0], s[1], te, ze, t_range, max_shift)[0] for s in series]
+            inside = (te >= t_range[0]) & (te <= t_range[1]) & (te <= t_end)
+            max_abs = [float(np.max(np.abs(np.interp(te[inside], s[0], s[1]) - ze[inside]))) for s in series]
+            mean_err, mean_shift = shifted_error(grid, mean, te, ze, t_range, max_shift)
+            free_err, free_shift = shifted_error(grid, mean, te, ze, t_range, max(args.free_shift, max_shift), max_shift)
+            w = (grid >= t_range[0]) & (grid <= t_range[1])
+            sd = zs.std(axis=0, ddof=1) if len(zs) > 1 else np.zeros_like(mean)
+            scatter = float(np.sqrt(np.mean((sd[w] / mean[w]) ** 2)))
+            change = float("nan")
+            if prev is not None:
+                pg, pm = prev
+                change = float(np.sqrt(np.mean(((np.interp(grid[w], pg, pm) - mean[w]) / mean[w]) ** 2)))
+            prev = (grid, mean)
+            s0 = runs[f][0][1]
+            spacing = 2 * s0["physics"]["particle_radius"]
+            rows.append({
+                "probe": p["name"], "refine": f, "spacing_m": spacing,
+                "length_per_spacing": 1 / (spacing * e.get("value_scale", 1.0)),
+                "particles": s0["fluid_particles"], "runs": len(series),
+                "steps_median": float(np.median([s["kept_steps"] for _, s in runs[f]])),
+                "err_median": float(np.median(per_run)), "err_min": min(per_run), "err_max": max(per_run),
+                "mean_err": mean_err, "mean_shift": mean_shift, "free_err": free_err, "free_shift": free_shift,
+                "scatter": scatter, "change": change, "max_shift": max_shift,
+                "max_abs_median": float(np.median(max_abs)), "max_abs_min": min(max_abs), "max_abs_max": max(max_abs),
+            })
+
+    with open(out / "resolution.csv", "w", newline="") as fcsv:
+        wr = csv.DictWriter(fcsv, fieldnames=list(rows[0].keys()))
+        wr.writeheader()
+        wr.writerows(rows)
+
+    pct = lambda x: "–" if x != x else f"{100 * x:.2f}"  # noqa: E731 (nan -> dash)
+    lines = [f"`{scene_path.name}`, {args.mode or 'scene mode'}, {args.runs} run(s) per resolution with "
+             f"`{key}` from {lo:g} to {hi:g}, {args.threads} threads, {machine()}, "
+             f"{datetime.datetime.now():%Y-%m-%d %H:%M}, engine {source_commit()}; "
+             f"{time.time() - started:.0f} s in all.", ""]
+    for p in probes:
+        e = p["experiment"]
+        lines += [f"Probe `{p['name']}` against `{e['file'].split('/')[-1]}` (RMS relative error over "
+                  f"{e.get('t_range')}, one shift |ΔT| ≤ {e.get('max_shift', 0.0):g}):", "",
+                  "| spacing | L / spacing | particles | steps (median) | error per run % median (min–max) | "
+                  "mean curve error % (ΔT) | free shift: error % (ΔT) | scatter % | change from coarser % | "
+                  "max \\|Δ\\| per run, no shift: median (min–max) |",
+                  "|---|---|---|---|---|---|---|---|---|---|"]
+        for r in (r for r in rows if r["probe"] == p["name"]):
+            lines.append(
+                f"| {1e3 * r['spacing_m']:.3g} mm | {r['length_per_spacing']:.1f} | {r['particles']:,} | "
+                f"{r['steps_median']:,.0f} | {pct(r['err_median'])} ({pct(r['err_min'])}–{pct(r['err_max'])}) | "
+                f"{pct(r['mean_err'])} ({r['mean_shift']:+.3f}) | {pct(r['free_err'])} ({r['free_shift']:+.3f}) | "
+                f"{pct(r['scatter'])} | {pct(r['change'])} | "
+                f"{r['max_abs_median']:.3f} ({r['max_abs_min']:.3f}–{r['max_abs_max']:.3f}) |")
+        lines.append("")
+    (out / "resolution.md").write_text("\n".join(lines))
+    print("\n".join(lines))
+    plot(out / "resolution.png", probes, factors, rows, curves, runs, scene_path)
+    print(f"wrote {out / 'resolution.md'}, {out / 'resolution.csv'}, {out / 'resolution.png'}")
+
+
+def plot(path, probes, factors, rows, curves, runs, scene_path):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(len(probes), 2, figsize=(11, 3.6 * len(probes)), squeeze=False)
+    for i, p in enumerate(probes):
+        mine = [r for r in rows if r["probe"] == p["name"]]
+        ax = axes[i][0]
+        x = [r["length_per_spacing"] for r in mine]
+        for r in mine:
+            errs = [shifted_error(*experiment_series(d, p, scene_path.parent), p["experiment"].get("t_range"),
+                                  p["experiment"].get("max_shift", 0.0))[0] for d, _ in runs[r["refine"]]]
+            ax.plot([r["length_per_spacing"]] * len(errs), [100 * v for v in errs], "o", color="0.6", ms=4)
+        ax.plot(x, [100 * r["mean_err"] for r in mine], "-s", label="mean curve, bounded shift")
+        ax.plot(x, [100 * r["free_err"] for r in mine], "--^", label="mean curve, free shift")
+        ax.plot(x[1:], [100 * r["change"] for r in mine[1:]], ":d", label="change from coarser")
+        ax.set_xscale("log")
+        ax.set_xticks(x, [f"{v:.3g}" for v in x])
+        ax.minorticks_off()
+        ax.set_xlabel("experiment length / particle spacing")
+        ax.set_ylabel("RMS relative error %")
+        ax.set_title(f"{p['name']}: error against spacing (grey: single runs)")
+        ax.legend(fontsize=8)
+        ax = axes[i][1]
+        for f in factors:
+            grid, mean, _ = curves[(p["name"], f)]
+            r = next(r for r in mine if r["refine"] == f)
+            ax.plot(grid, mean, label=f"1/{r['length_per_spacing']:.0f} (mean of {r['runs']})")
+        _, _, te, ze = experiment_series(runs[factors[0]][0][0], p, scene_path.parent)
+        ax.plot(te, ze, "ko", ms=4, label="experiment")
+        ax.set_xlabel("T (dimensionless time)")
+        ax.set_ylabel("Z (dimensionless)")
+        ax.set_title(f"{p['name']}: mean curves, no shift")
+        ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+if __name__ == "__main__":
+    main()
