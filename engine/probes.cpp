@@ -14,6 +14,8 @@
 #include <numeric>
 #include <sstream>
 
+#include <nlohmann/json.hpp>
+
 #include "engine/components.hpp"
 #include "engine/errors.hpp"
 #include "engine/io.hpp"
@@ -316,6 +318,43 @@ void ProbeSet::write(const std::filesystem::path& dir) const {
     if (m_series.empty()) return;
     std::filesystem::create_directories(dir / "probes");
     for (const auto& s : m_series) write_file_atomic(dir / "probes" / (s.name + ".csv"), s.csv());
+}
+
+nlohmann::json ProbeSet::state() const {
+    nlohmann::json out = nlohmann::json::array();
+    for (std::size_t k = 0; k < m_series.size(); ++k) {
+        nlohmann::json rows = nlohmann::json::array();
+        for (const auto& r : m_series[k].rows) {
+            nlohmann::json row = nlohmann::json::array();
+            for (const double v : r) row.push_back(std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr));
+            rows.push_back(std::move(row));
+        }
+        out.push_back({{"name", m_series[k].name}, {"columns", m_series[k].columns}, {"taken", m_taken[k]},
+                       {"rows", std::move(rows)}});
+    }
+    return out;
+}
+
+void ProbeSet::restore(const nlohmann::json& st) {
+    const auto mismatch = [](const std::string& what) {
+        throw InputError("checkpoint probes: " + what + " (the checkpoint was written by another scene)");
+    };
+    if (!st.is_array() || st.size() != m_series.size())
+        mismatch("expected " + std::to_string(m_series.size()) + " probe series");
+    for (std::size_t k = 0; k < m_series.size(); ++k) {
+        const nlohmann::json& s = st[k];
+        if (s.value("name", std::string()) != m_series[k].name ||
+            s.value("columns", std::vector<std::string>()) != m_series[k].columns)
+            mismatch("series " + std::to_string(k) + " is not probe '" + m_series[k].name + "' with its columns");
+        std::vector<std::vector<double>> rows;
+        for (const auto& row : s.at("rows")) {
+            if (row.size() != m_series[k].columns.size()) mismatch("a row of '" + m_series[k].name + "' has the wrong width");
+            std::vector<double>& r = rows.emplace_back();
+            for (const auto& v : row) r.push_back(v.is_null() ? std::numeric_limits<double>::quiet_NaN() : v.get<double>());
+        }
+        m_series[k].rows = std::move(rows);
+        m_taken[k] = s.at("taken").get<std::int64_t>();
+    }
 }
 
 }  // namespace sph

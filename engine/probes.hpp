@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json_fwd.hpp>
+
 #include "engine/grid.hpp"
 #include "engine/probe_desc.hpp"
 
@@ -82,6 +84,12 @@ public:
     const ProbeSeries& series(const std::string& name) const;
     /// @brief Writes `<dir>/probes/<name>.csv` for every probe (atomically).
     void write(const std::filesystem::path& dir) const;
+    /// @brief Every series and sampling counter, for a checkpoint (numbers round-trip exactly;
+    /// a NaN sample is stored as null).
+    nlohmann::json state() const;
+    /// @brief Continues from what state() saved, so a resumed run writes the whole series.
+    /// Throws InputError if the saved probes are not this set's (names and columns).
+    void restore(const nlohmann::json& st);
 
 private:
     void sample(std::size_t k, const World& w, const UniformGrid& grid);

@@ -61,6 +61,9 @@ Recorder::Recorder(std::filesystem::path dir, const Simulation& sim, const nlohm
     m_rho_err_avg_max = st.at("rho_err_avg_max").get<double>();
     m_iterations_sum = st.at("iterations_sum").get<std::uint64_t>();
     for (const auto& f : st.at("fronts")) m_fronts.emplace_back(f.at(0).get<double>(), f.at(1).get<double>());
+    // The probe series so far (checkpoints of earlier versions have none: their probes restart
+    // at the resume time).
+    if (const auto it = st.find("probes"); it != st.end()) m_probes.restore(*it);
     const std::uint64_t bytes = st.at("stats_bytes").get<std::uint64_t>();
     const auto csv = m_dir / "stats.csv";
     std::error_code ec;
@@ -96,7 +99,8 @@ nlohmann::json Recorder::state() {
             {"rho_err_avg_max", m_rho_err_avg_max},
             {"iterations_sum", m_iterations_sum},
             {"fronts", m_fronts},
-            {"stats_bytes", m_stats_bytes}};
+            {"stats_bytes", m_stats_bytes},
+            {"probes", m_probes.state()}};
 }
 
 void Recorder::begin(const Simulation& sim) {

@@ -5,8 +5,9 @@
 #  2. SIGKILL in the middle of a run (after its first checkpoint, while it is writing frames
 #     and rows): every file left is complete and readable (each frame parses with all its
 #     arrays, stats.csv holds whole rows only, no temporary file is left).
-#  3. --resume from the last checkpoint the killed run left completes it, and its frames and
-#     stats.csv rows equal the uninterrupted run's byte for byte.
+#  3. --resume from the last checkpoint the killed run left completes it, and its frames,
+#     stats.csv rows and probe series equal the uninterrupted run's byte for byte (also when
+#     resumed into a new directory: the checkpoint carries the probe series).
 #  4. A damaged, truncated or wrong-version checkpoint, or --resume with a scene, exits 2 with
 #     the reason.
 set -uo pipefail
@@ -81,6 +82,12 @@ last=$(ls "$tmp/k/checkpoints" | tail -1)
 check "resume from $last exits 0 (got $rc)" '[ $rc -eq 0 ]'
 check "resumed run: stats.csv physics columns equal the uninterrupted run's" 'cmp -s <(physics "$tmp/a/stats.csv") <(physics "$tmp/k/stats.csv")'
 check "resumed run: frames byte-identical to the uninterrupted run's" 'same_frames "$tmp/a" "$tmp/k"'
+same_probes() {  # same_probes DIR_A DIR_B: same probe series, byte-identical (the whole run's)
+  [ -n "$(ls "$1/probes")" ] && [ "$(cd "$1/probes" && ls)" = "$(cd "$2/probes" && ls)" ] || return 1
+  for f in "$1"/probes/*; do cmp -s "$f" "$2/probes/$(basename "$f")" || { echo "  differs: $(basename "$f")"; return 1; }; done
+}
+check "resumed run: probes/*.csv byte-identical to the uninterrupted run's (samples before the checkpoint kept)" \
+  'same_probes "$tmp/a" "$tmp/k"'
 check "resumed run: summary physics equal" '"$py" -c "
 import json, sys
 a = json.load(open(\"$tmp/a/summary.json\")); k = json.load(open(\"$tmp/k/summary.json\"))
@@ -93,6 +100,7 @@ check "resume into a new --out exits 0 (got $rc)" '[ $rc -eq 0 ]'
 check "its frames equal the uninterrupted run's" 'for f in "$tmp"/b/frames/*; do cmp -s "$f" "$tmp/a/frames/$(basename "$f")" || exit 1; done'
 check "its stats.csv rows are the uninterrupted run's from the checkpoint on" \
   '[ "$(physics "$tmp/b/stats.csv" | tail -n +2)" = "$(physics "$tmp/a/stats.csv" | tail -n +$(( 10#${first//[^0-9]/} + 2 )))" ]'
+check "its probes/*.csv are the whole run's (the checkpoint carries the series)" 'same_probes "$tmp/a" "$tmp/b"'
 
 # 4. Bad checkpoints.
 ck=$tmp/a/checkpoints/$first
