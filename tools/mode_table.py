@@ -36,6 +36,9 @@ ap.add_argument("--no-constant", action="store_true", help="skip the constant-st
 ap.add_argument("--repeat", type=int, default=1, help="runs per configuration, interleaved; medians reported")
 ap.add_argument("--sph-run", default="build/tools/sph-run")
 ap.add_argument("--out", default="out/mode_table")
+ap.add_argument("--reuse", action="store_true",
+                help="read a run's summary.json from --out if it is there instead of running it again "
+                     "(re-tabulates an earlier or interrupted table with the same options)")
 ap.add_argument("--extra", action="append", default=[],
                 help="an extra configuration, e.g. 'individual(global λ):simulation.stepping.mode=individual,"
                      "simulation.stepping.lambda_v=0.1'")
@@ -55,6 +58,9 @@ def run(tag, scale, sets, rep=0):
         cmd += ["--end", str(args.end)]
     for s in sets:
         cmd += ["--set", s]
+    if args.reuse and (out / "summary.json").exists():
+        print(f"reusing {out / 'summary.json'}", file=sys.stderr, flush=True)
+        return json.loads((out / "summary.json").read_text())
     print(f"[{time.strftime('%H:%M:%S')}] {' '.join(cmd)}", file=sys.stderr, flush=True)
     proc = subprocess.run(cmd, capture_output=True, text=True)
     if proc.returncode != 0:
@@ -67,6 +73,7 @@ def fronts(s):
 
 
 rows = []
+system_tables = []  # per scale: (configurations, {system: {configuration: ms per step}})
 for scale in [float(s) for s in args.scales.split(",")]:
     # The first global run also fixes the constant step (its smallest step).
     first = run("global", scale, ["simulation.stepping.mode=global"], 0)
@@ -87,6 +94,11 @@ for scale in [float(s) for s in args.scales.split(",")]:
     med = {name: (statistics.median(r["wall_time_s"] for r in rs), statistics.median(r.get("cpu_time_s", float("nan")) for r in rs))
            for name, rs in runs.items()}
     g = runs["global"][0]
+    per_step = {}
+    for name, rs in runs.items():
+        for r in rs:
+            for sy in r.get("systems", []):
+                per_step.setdefault(sy["name"], {}).setdefault(name, []).append(1e3 * sy["seconds"] / max(r["steps"], 1))
     extras = [n for n, _ in configs if n not in ("global", "constant", "individual")]
     order = (["constant"] if "constant" in runs else []) + ["global", "individual"] + extras
     for name in order:
@@ -106,6 +118,7 @@ for scale in [float(s) for s in args.scales.split(",")]:
             "speedup_vs_global_cpu": med["global"][1] / cpu,
             "speedup_vs_constant": med["constant"][0] / wall if "constant" in med else float("nan"),
         })
+    system_tables.append((scale, order, {sy: {n: statistics.median(v) for n, v in c.items()} for sy, c in per_step.items()}))
 
 machine = f"{os.cpu_count()} cores, {platform.processor() or platform.machine()}"
 lines = [f"`{pathlib.Path(args.scene).name}`, {args.threads} threads, {machine}, "
@@ -120,6 +133,14 @@ for r in rows:
                  f"{r['avg_dt_ms']:.3f} ({r['min_dt_ms']:.3f}–{r['max_dt_ms']:.3f}) | {r['avg_active_pct']:.0f} % | "
                  f"{r['max_density_error_pct']:.1f} % | {r['front_x_m']} at {r['front_t_s']} | {r['front_dev_vs_global_pct']:.1f} % | {r['collisions']} | "
                  f"{r['speedup_vs_global']:.2f}, {r['speedup_vs_global_cpu']:.2f} ({r['speedup_vs_constant']:.2f}) |")
+# Where a step's time goes: each system's wall time per step from summary.json (median over the
+# runs of a configuration); a system a configuration does not build shows a dash.
+for scale, order, table in system_tables:
+    lines += ["", f"Milliseconds per step by system (scale {scale:g}; median over the runs; `step` is their sum):", "",
+              "| system | " + " | ".join(order) + " |", "|---|" + "---|" * len(order)]
+    for sy, by in table.items():
+        lines.append(f"| {sy} | " + " | ".join(f"{by[n]:.2f}" if n in by else "–" for n in order) + " |")
+    lines.append("| **step** | " + " | ".join(f"**{sum(by.get(n, 0.0) for by in table.values()):.2f}**" for n in order) + " |")
 text = "\n".join(lines) + "\n"
 print(text)
 out_root.mkdir(parents=True, exist_ok=True)
