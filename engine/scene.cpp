@@ -200,10 +200,10 @@ constexpr std::array<const char*, 7> k_simulation_keys{
     "method", "stepping", "end_time", "frame_rate", "scale", "gravity", "sort_interval"};
 constexpr std::array<const char*, 9> k_stepping_keys{"mode",     "dt",       "lambda_v", "lambda_f", "acoustic",
                                                      "lambda_c", "dt_max",   "dt_min",   "activation"};
-constexpr std::array<const char*, 8> k_fluid_keys{"rest_density",        "particle_radius", "viscosity",
+constexpr std::array<const char*, 9> k_fluid_keys{"rest_density",        "particle_radius", "viscosity",
                                                   "speed_of_sound",      "density_fluctuation",
                                                   "surface_tension",     "boundary_viscosity",
-                                                  "pressure_gradient"};
+                                                  "pressure_gradient",   "support"};
 constexpr std::array<const char*, 2> k_box_keys{"min", "max"};
 constexpr std::array<const char*, 4> k_block_keys{"min", "max", "velocity", "hydrostatic"};
 constexpr std::array<const char*, 4> k_boxlike_boundary_keys{"type", "min", "max", "motion"};
@@ -1119,6 +1119,7 @@ class Reader {
         check_keys(n, k_fluid_keys);
         read_number(n, "rest_density", positive("kg/m^3"), p.rest_density);
         read_number(n, "particle_radius", positive("metres"), p.particle_radius);
+        read_number(n, "support", {1.5, true, 4.0, true, "kernel support radius in particle spacings"}, p.support);
         read_number(n, "viscosity", non_negative("artificial viscosity alpha"), p.viscosity);
         if (const json* v = n.find("speed_of_sound")) {
             p.speed_of_sound = number(n.at(*v, "speed_of_sound"), positive("m/s"));

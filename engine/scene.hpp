@@ -108,7 +108,10 @@ struct SimulationParams {
 
 struct FluidParams {
     double rest_density = 1000.0;     ///< kg/m^3
-    double particle_radius = 0.01;    ///< m, before `scale`; spacing is 2 r, support h = 4 r.
+    double particle_radius = 0.01;    ///< m, before `scale`; spacing is 2 r, support h = support * 2 r.
+    /// Kernel support radius h in particle spacings (default 2: h = 4 r, as He et al.). A larger
+    /// support lowers the kernel-sum error at a cost of about support^3 neighbours per particle.
+    double support = 2.0;
     double viscosity = 0.1;           ///< Monaghan artificial viscosity alpha (dimensionless).
     std::optional<double> speed_of_sound;  ///< m/s; default from density_fluctuation.
     double density_fluctuation = 0.01;     ///< target |rho/rho0 - 1| for the default c_s.

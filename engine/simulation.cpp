@@ -68,14 +68,14 @@ void initialise_world(World& w, const Scene& scene) {
     const double r = scene.particle_radius();
     ph.particle_radius = Real(r);
     ph.spacing = Real(2 * r);
-    ph.h = Real(4 * r);
+    ph.h = Real(scene.fluid.support * 2 * r);  // 4 r by default (He et al.)
     ph.rest_density = Real(scene.fluid.rest_density);
     ph.viscosity = Real(scene.fluid.viscosity);
     ph.boundary_viscosity = Real(scene.fluid.boundary_viscosity.value_or(scene.fluid.viscosity));
     ph.gravity = scene.simulation.gravity.cast<Real>();
     w.kernel = CubicSpline(ph.h);
     ph.mass = lattice_mass(w.kernel, ph.spacing, ph.rest_density);
-    w.domain = scene.domain ? *scene.domain : default_domain(scene, 4 * r);
+    w.domain = scene.domain ? *scene.domain : default_domain(scene, double(ph.h));
 
     // Fluid particles (positions are written once c_s is known: see the hydrostatic step).
     std::vector<Vec3d> xs;

@@ -41,7 +41,7 @@ inline const std::string fluid_count = "fluid.count";                      ///< 
 struct Physics {
     Real particle_radius = 0;
     Real spacing = 0;         ///< 2 r: lattice spacing of fluid and boundary sampling
-    Real h = 0;               ///< support radius, 4 r
+    Real h = 0;               ///< support radius, fluid.support * 2 r (4 r by default)
     Real rest_density = 1000;
     Real mass = 0;            ///< m = rho0 / sum_j W_ij over a filled lattice (see README)
     Real speed_of_sound = 0;  ///< c_s

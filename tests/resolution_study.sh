@@ -81,7 +81,7 @@ assert b[:8] == b"\x89PNG\r\n\x1a\n" and len(b) > 10000
 print("resolution_study: ok")
 PY
 # bad input: a clear error naming the option, exit 2, nothing run
-for bad in "--refine 1,x" "--refine 0,1" "--perturb lambda_c" "--runs 0"; do
+for bad in "--refine 1,x" "--refine 0,1" "--perturb lambda_c" "--runs 0" "--vary fluid.support=2"; do
     set +e; /usr/bin/python3 tools/resolution_study.py scenes/martin_moyce.json $bad --sph-run "$sph_run" \
         --out "$out/bad" > "$out/bad.log" 2>&1; rc=$?; set -e
     [ "$rc" = 2 ] || { echo "'$bad': exit $rc, expected 2"; cat "$out/bad.log"; exit 1; }

@@ -4,6 +4,7 @@ spacing, and how much of it is run-to-run scatter.
 
 usage: tools/resolution_study.py SCENE.json [--refine 0.5,0.75,1,1.5] [--runs 6]
            [--perturb simulation.stepping.lambda_c=0.36:0.44] [--mode global] [--set KEY=VALUE ...]
+           [--vary KEY=V1,V2,... (one value per refinement factor)]
            [--end T] [--threads 2] [--free-shift 1.0] [--out out/resolution/<scene>]
            [--sph-run build/tools/sph-run]
 
@@ -64,6 +65,9 @@ def main():
     ap.add_argument("--runs", type=int, default=6, help="perturbed runs per resolution (default 6)")
     ap.add_argument("--perturb", default="simulation.stepping.lambda_c=0.36:0.44",
                     help="KEY=LOW:HIGH spread over the runs (default simulation.stepping.lambda_c=0.36:0.44)")
+    ap.add_argument("--vary", action="append", default=[],
+                    help="KEY=V1,V2,... one value per --refine factor, in --refine's order (e.g. "
+                         "fluid.support=2,2.45,3 to grow the kernel support as the spacing falls)")
     ap.add_argument("--mode", help="stepping mode (default: the scene's)")
     ap.add_argument("--set", action="append", default=[], help="override for every run")
     ap.add_argument("--end", type=float, help="simulated seconds (default: the scene's end_time)")
@@ -89,6 +93,14 @@ def main():
         fail(f"--refine '{args.refine}': every factor must be > 0")
     if args.runs < 1:
         fail(f"--runs {args.runs}: expected at least 1")
+    per_factor = {f: [] for f in factors}  # --vary: the overrides of each refinement
+    for spec in args.vary:
+        k, _, vals = spec.partition("=")
+        vals = [v.strip() for v in vals.split(",")]
+        if not k or len(vals) != len(factors) or not all(vals):
+            fail(f"--vary '{spec}': expected KEY=V1,...,V{len(factors)}, one value per --refine factor")
+        for f, v in zip(factors, vals):
+            per_factor[f].append(f"{full_key(k.strip())}={v}")
     factors.sort()
     key, lo, hi = parse_perturb(args.perturb)
     values = [0.5 * (lo + hi)] if args.runs == 1 else list(np.linspace(lo, hi, args.runs))
@@ -114,8 +126,11 @@ def main():
                 cmd += ["--end", repr(args.end)]
             for s in args.set:
                 cmd += ["--set", full_key(s)]
+            for s in per_factor[f]:
+                cmd += ["--set", s]
             n = fi * len(values) + k + 1
-            print(f"[{n}/{total}] refine {f:g}, {key} = {v:.4g} ...", end=" ", flush=True)
+            print(f"[{n}/{total}] refine {f:g}{''.join(', ' + s for s in per_factor[f])}, {key} = {v:.4g} ...",
+                  end=" ", flush=True)
             t0 = time.time()
             r = subprocess.run(cmd, capture_output=True, text=True)
             if r.returncode != 0:
@@ -172,7 +187,8 @@ def main():
         wr.writerows(rows)
 
     pct = lambda x: "–" if x != x else f"{100 * x:.2f}"  # noqa: E731 (nan -> dash)
-    lines = [f"`{scene_path.name}`, {args.mode or 'scene mode'}, {args.runs} run(s) per resolution with "
+    varied = "".join(f"; `{s}` per refinement" for s in args.vary)
+    lines = [f"`{scene_path.name}`{varied}, {args.mode or 'scene mode'}, {args.runs} run(s) per resolution with "
              f"`{key}` from {lo:g} to {hi:g}, {args.threads} threads, {machine()}, "
              f"{datetime.datetime.now():%Y-%m-%d %H:%M}, engine {source_commit()}; "
              f"{time.time() - started:.0f} s in all.", ""]

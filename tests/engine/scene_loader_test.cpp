@@ -135,7 +135,7 @@ TEST(SceneLoader, SuggestionsIgnoreCaseAndAllowTranspositions) {
         error_of([] { parse_scene(R"({"name": "t", "fluid": {"viscostiy": 0.1}})", "s.json"); }),
         "s.json: /fluid: found unknown key \"viscostiy\", expected one of: rest_density, "
         "particle_radius, viscosity, speed_of_sound, density_fluctuation, surface_tension, boundary_viscosity, "
-        "pressure_gradient (did you mean \"viscosity\"?)");
+        "pressure_gradient, support (did you mean \"viscosity\"?)");
 }
 
 // ---- (b) Valid scenes. ----
@@ -152,7 +152,7 @@ TEST(SceneLoader, CompleteSceneParsesEveryField) {
       },
       "domain": {"min": [-0.5, -0.5, -0.5], "max": [2.5, 1.5, 1.5]},
       "fluid": {"rest_density": 998.2, "particle_radius": 0.02, "viscosity": 0,
-                "speed_of_sound": 40, "density_fluctuation": 0.02},
+                "speed_of_sound": 40, "density_fluctuation": 0.02, "support": 2.5},
       "fluid_blocks": [
         {"min": [0, 0, 0], "max": [0.4, 0.6, 1]},
         {"min": [1.5, 0, 0], "max": [2, 0.2, 1], "velocity": [-1, 0, 0.5]}
@@ -194,6 +194,7 @@ TEST(SceneLoader, CompleteSceneParsesEveryField) {
     ASSERT_TRUE(s.fluid.speed_of_sound.has_value());
     EXPECT_DOUBLE_EQ(*s.fluid.speed_of_sound, 40.0);
     EXPECT_DOUBLE_EQ(s.fluid.density_fluctuation, 0.02);
+    EXPECT_DOUBLE_EQ(s.fluid.support, 2.5);
 
     ASSERT_EQ(s.fluid_blocks.size(), 2u);
     EXPECT_EQ(s.fluid_blocks[0].box.min, Vec3d(0, 0, 0));

@@ -1,7 +1,9 @@
 // Each WCSPH system is checked against an O(N^2) reference in double precision that uses no
 // grid and no neighbour list: Akinci volumes, summation density + Tait pressure (He eq. 1-2,
 // Akinci eq. 6), and forces (He eq. 4 with Monaghan viscosity and Akinci boundary forces).
-// The fluid is a jittered block in a container, so sums are not lattice-symmetric.
+// The fluid is a jittered block in a container, so sums are not lattice-symmetric. Run at the
+// default kernel support (2 spacings, about 30 neighbours) and at fluid.support = 3 (about 110:
+// the neighbour lists outgrow their first capacity of 48 and are rebuilt).
 #include <gtest/gtest.h>
 
 #include <random>
@@ -22,9 +24,10 @@ namespace {
 
 struct Fixture {
     World w;
-    Fixture() {
+    explicit Fixture(double support) {
         Scene s = test::tank_scene(Vec3d(0.16, 0.2, 0.1), Vec3d(0.3, 0.3, 0.1));
         s.fluid.viscosity = 0.1;
+        s.fluid.support = support;
         initialise_world(w, s);
         // Jitter and give random velocities so that every term is exercised.
         std::mt19937 rng(11);
@@ -51,11 +54,14 @@ struct Fixture {
     }
 };
 
+class BruteForce : public ::testing::TestWithParam<double> {};
+
 }  // namespace
 
-TEST(BruteForce, BoundaryVolumeDensityAndForces) {
-    Fixture f;
+TEST_P(BruteForce, BoundaryVolumeDensityAndForces) {
+    Fixture f(GetParam());
     const World& w = f.w;
+    ASSERT_FLOAT_EQ(w.physics.h, float(GetParam() * 2 * w.physics.particle_radius));
     const auto x = w.fluid.store.get(comp::position);
     const auto v = w.fluid.store.get(comp::velocity);
     const auto xb = w.boundary.store.get(comp::position);
@@ -129,9 +135,11 @@ TEST(BruteForce, BoundaryVolumeDensityAndForces) {
 }
 
 // The mass rule: a particle inside a filled lattice has exactly the rest density.
-TEST(BruteForce, LatticeMassGivesRestDensityInside) {
+TEST_P(BruteForce, LatticeMassGivesRestDensityInside) {
     World w;
-    initialise_world(w, test::tank_scene(Vec3d(0.2, 0.2, 0.2), Vec3d(0.3, 0.3, 0.3)));
+    Scene s = test::tank_scene(Vec3d(0.2, 0.2, 0.2), Vec3d(0.3, 0.3, 0.3));
+    s.fluid.support = GetParam();
+    initialise_world(w, s);
     const auto x = w.fluid.store.get(comp::position);
     const Vec3 centre(0.1f, 0.1f, 0.1f);
     std::size_t inner = 0;
@@ -144,3 +152,6 @@ TEST(BruteForce, LatticeMassGivesRestDensityInside) {
     }
     EXPECT_GT(inner, 0u);
 }
+
+INSTANTIATE_TEST_SUITE_P(Support, BruteForce, ::testing::Values(2.0, 3.0),
+                         [](const auto& info) { return info.param == 2.0 ? "default2" : "wide3"; });

@@ -245,7 +245,9 @@ void check_fraction(double fraction) {
     if (next != std::numeric_limits<Tick>::max()) expected = std::min(expected, std::max(next - w.step.t_ticks, floor_ticks));
     EXPECT_EQ(w.step.dt_ticks, expected);
     // With none active the step is set by the sleeping particles alone: the cap must bind there.
-    if (fraction == 0.0) EXPECT_LT(expected, to_ticks(dt_min)) << "the deadline cap is not exercised";
+    if (fraction == 0.0) {
+        EXPECT_LT(expected, to_ticks(dt_min)) << "the deadline cap is not exercised";
+    }
 
     // --- asynchronous integration (lines 18-21 and 9): every particle from its base state,
     // Delta = t + Delta t_sim - t_last, against double arithmetic (1e-6 relative: one float
