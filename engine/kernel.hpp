@@ -1,7 +1,8 @@
 #pragma once
 /// @file kernel.hpp
 /// @brief Cubic spline kernel (Monaghan 1992), written with the support radius h (W = 0 for
-/// r >= h), normalised in 3-D: sigma = 8 / (pi h^3). With particle radius r, h = 4 r by default (scene key fluid.support).
+/// r >= h), normalised in 3-D: sigma = 8 / (pi h^3). With particle radius r, h = 4 r by
+/// default (scene key fluid.support, in spacings 2 r).
 #include <cmath>
 #include <numbers>
 
