@@ -157,7 +157,8 @@ def main():
             curves[(p["name"], f)] = (grid, mean, zs)
             per_run = [shifted_error(s[0], s[1], te, ze, t_range, max_shift)[0] for s in series]
             inside = (te >= t_range[0]) & (te <= t_range[1]) & (te <= t_end)
-            max_abs = [float(np.max(np.abs(np.interp(te[inside], s[0], s[1]) - ze[inside]))) for s in series]
+            max_abs = [float(np.max(np.abs(np.interp(te[inside], s[0], s[1]) - ze[inside]))) if inside.any()
+                       else float("nan") for s in series]  # nan: the runs end before the measured range
             mean_err, mean_shift = shifted_error(grid, mean, te, ze, t_range, max_shift)
             free_err, free_shift = shifted_error(grid, mean, te, ze, t_range, max(args.free_shift, max_shift), max_shift)
             w = (grid >= t_range[0]) & (grid <= t_range[1])
