@@ -141,7 +141,7 @@ def main():
             runs[f].append((d, summary))
 
     rows = []
-    curves = {}  # (probe, factor) -> (T grid, mean Z, per-run Z)
+    curves = {}  # (probe, factor) -> (T grid, mean Z, per-run errors against the experiment)
     for p in probes:
         e = p["experiment"]
         t_range = e.get("t_range", [-1e300, 1e300])
@@ -154,8 +154,8 @@ def main():
             grid = np.linspace(max(s[0][0] for s in series), t_end, 2000)
             zs = np.array([np.interp(grid, s[0], s[1]) for s in series])
             mean = zs.mean(axis=0)
-            curves[(p["name"], f)] = (grid, mean, zs)
             per_run = [shifted_error(s[0], s[1], te, ze, t_range, max_shift)[0] for s in series]
+            curves[(p["name"], f)] = (grid, mean, per_run)
             inside = (te >= t_range[0]) & (te <= t_range[1]) & (te <= t_end)
             max_abs = [float(np.max(np.abs(np.interp(te[inside], s[0], s[1]) - ze[inside]))) if inside.any()
                        else float("nan") for s in series]  # nan: the runs end before the measured range
@@ -226,8 +226,7 @@ def plot(path, probes, factors, rows, curves, runs, scene_path):
         ax = axes[i][0]
         x = [r["length_per_spacing"] for r in mine]
         for r in mine:
-            errs = [shifted_error(*experiment_series(d, p, scene_path.parent), p["experiment"].get("t_range"),
-                                  p["experiment"].get("max_shift", 0.0))[0] for d, _ in runs[r["refine"]]]
+            errs = curves[(p["name"], r["refine"])][2]
             ax.plot([r["length_per_spacing"]] * len(errs), [100 * v for v in errs], "o", color="0.6", ms=4)
         ax.plot(x, [100 * r["mean_err"] for r in mine], "-s", label="mean curve, bounded shift")
         ax.plot(x, [100 * r["free_err"] for r in mine], "--^", label="mean curve, free shift")
