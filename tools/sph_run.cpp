@@ -13,11 +13,12 @@
 #include <tbb/global_control.h>
 #include <tbb/info.h>
 
-#include "engine/checkpoint.hpp"
-#include "engine/errors.hpp"
-#include "engine/recorder.hpp"
+#include "engine/run/checkpoint.hpp"
+#include "engine/core/errors.hpp"
+#include "engine/run/io.hpp"
+#include "engine/run/recorder.hpp"
 #include "systems/debug/nan_injection_system.hpp"
-#include "systems/methods/wcsph.hpp"
+#include "systems/methods/recipes.hpp"
 
 namespace {
 
@@ -153,7 +154,7 @@ int main(int argc, char** argv) {
                      sph::to_string(scene.simulation.stepping.mode), scene.simulation.end_time, nthreads,
                      std::chrono::duration<double>(std::chrono::steady_clock::now() - t_setup).count());
         if (!graph_file.empty()) {
-            sim->graph().write_dot(graph_file);
+            sph::write_file_atomic(graph_file, sim->graph().dot());
             spdlog::info("system graph written to {}", graph_file);
         }
         const std::filesystem::path out = out_dir.empty() ? std::filesystem::path("out") / scene.name : std::filesystem::path(out_dir);
@@ -201,7 +202,7 @@ int main(int argc, char** argv) {
             const double eta = s.time() > 0 ? wall * (end - s.time()) / s.time() : 0.0;
             char line[256];
             std::snprintf(line, sizeof line, "t = %.4f / %.3g s  step %lld  dt = %.3e s  wall %s  ETA %s", s.time(),
-                          end, static_cast<long long>(s.steps()), s.world().step.dt, format_seconds(wall).c_str(),
+                          end, static_cast<long long>(s.steps()), s.world().step_size.dt, format_seconds(wall).c_str(),
                           format_seconds(eta).c_str());
             if (tty)
                 std::fprintf(stderr, "\r%s   ", line);

@@ -7,15 +7,16 @@
 #include <algorithm>
 #include <atomic>
 
-#include "engine/components.hpp"
-#include "engine/world.hpp"
+#include "engine/data/components.hpp"
+#include "engine/data/world.hpp"
+#include "engine/graph/context.hpp"
 
 namespace sph {
 
 Access SelectActiveSystem::access() const {
-    return {{res::fluid(comp::t_last.name), res::fluid(comp::dt.name), res::fluid(comp::position.name),
-             res::moving_bodies},
-            {res::fluid(comp::active.name), res::fluid(comp::wake.name), res::active_set}};
+    return Access()
+        .read(fluid(comp::t_last), fluid(comp::dt), fluid(comp::position), res::moving_bodies, res::dt)
+        .write(fluid(comp::active), fluid(comp::wake), res::active_set, counter::active);
 }
 
 void SelectActiveSystem::register_components(World& w) {
@@ -25,24 +26,23 @@ void SelectActiveSystem::register_components(World& w) {
     w.fluid.store.add(comp::wake);
 }
 
-void SelectActiveSystem::run(World& w) {
-    const auto t_last = w.fluid.store.get(comp::t_last);
-    const auto dt = w.fluid.store.get(comp::dt);
-    auto active = w.fluid.store.get(comp::active);
-    auto wake = w.fluid.store.get(comp::wake);
-    const auto x = w.fluid.store.get(comp::position);
-    const Tick now = w.step.t_ticks;
+void SelectActiveSystem::run(Context& ctx) {
+    const auto t_last = ctx.read(fluid(comp::t_last));
+    const auto dt = ctx.read(fluid(comp::dt));
+    auto active = ctx.write(fluid(comp::active));
+    auto wake = ctx.write(fluid(comp::wake));
+    const auto x = ctx.read(fluid(comp::position));
+    const Tick now = ctx.clock().t_ticks;
     // The deadline rule (scene key simulation.stepping.activation, default): evaluate a particle
     // at the last step that starts before its deadline t_last + Delta t_i, predicting this step's
     // length by the last stable Delta t_sim (IndividualGlobalDtSystem then keeps the step from
     // carrying anyone past a deadline). He's rule as written (`paper`) evaluates at the first
     // step that starts at or after the deadline: ahead = one tick.
-    const Tick ahead = w.scene.simulation.stepping.activation == Activation::Deadline
-                           ? std::max<Tick>(1, to_ticks(w.step.dt_stable))
-                           : Tick(1);
+    const Tick ahead = m_activation == Activation::Deadline ? std::max<Tick>(1, to_ticks(ctx.read(res::dt).dt_stable))
+                                                           : Tick(1);
     const std::size_t n = t_last.size();
-    const Real h = w.physics.h;
-    const auto& bodies = w.moving_bodies;
+    const Real h = ctx.physics().h;
+    const auto& bodies = ctx.read(res::moving_bodies);
     // Moving boundaries (our rule, not in He et al.): a particle is active while it lies within
     // h + speed * Delta t_i of a moving body's bounding box, i.e. wherever the body could come
     // within the kernel's reach before the particle's next evaluation. It therefore never
@@ -64,30 +64,35 @@ void SelectActiveSystem::run(World& w) {
             wake[i] = 0;
         }
     });
-    w.active_set = collect_indices(n, [&](std::size_t i) { return active[i] != 0; });
-    w.step.active = w.active_set.size();
+    auto& set = ctx.write(res::active_set);
+    set = collect_indices(n, [&](std::size_t i) { return active[i] != 0; });
+    ctx.write(counter::active) = set.size();
 }
 
 Access HaloSystem::access() const {
-    Access a{{res::active_set, res::fluid_neighbours, res::fluid(comp::active.name)}, {res::halo_set}};
-    if (m_with_boundary) a.reads.push_back(res::boundary_neighbours);
-    return a;
+    return Access()
+        .read(res::active_set, res::fluid_neighbours, fluid(comp::active))
+        .write(res::halo_set, counter::boundary_contributions)
+        .read_if(m_with_boundary, res::boundary_neighbours);
 }
 
 void HaloSystem::register_components(World& w) { w.fluid.store.add(comp::active); }
 
-void HaloSystem::run(World& w) {
-    const auto active = w.fluid.store.get(comp::active);
-    const auto& set = w.active_set;
+void HaloSystem::run(Context& ctx) {
+    const auto active = ctx.read(fluid(comp::active));
+    const auto& set = ctx.read(res::active_set);
+    const NeighbourLists& fluid_nb = ctx.read(res::fluid_neighbours);
+    const NeighbourLists* boundary_nb = m_with_boundary ? &ctx.read(res::boundary_neighbours) : nullptr;
+    auto& halo = ctx.write(res::halo_set);
     // A per-particle claim flag keeps each halo particle once; flags are cleared afterwards
     // by walking the halo itself, so the cost stays proportional to the active set.
     m_claim.resize(active.size());
     if (set.size() == active.size()) {  // everyone active: no halo (global-equivalent steps)
-        w.halo_set.clear();
+        halo.clear();
         std::uint64_t b = 0;
         if (m_with_boundary)
-            for (auto c : w.boundary_neighbours.count) b += c;
-        w.step.boundary_contributions = b;
+            for (auto c : boundary_nb->count) b += c;
+        ctx.write(counter::boundary_contributions) = b;
         return;
     }
     tbb::enumerable_thread_specific<std::vector<Index>> local;
@@ -97,7 +102,7 @@ void HaloSystem::run(World& w) {
         auto& bcount = boundary_entries.local();
         for (std::size_t k = r.begin(); k < r.end(); ++k) {
             const Index i = set[k];
-            for (Index j : w.fluid_neighbours.of(i)) {
+            for (Index j : fluid_nb.of(i)) {
                 if (active[j]) continue;
                 // A plain load first: most halo particles neighbour several active ones, and
                 // the locked exchange (the cost of this system) is only paid on a first claim.
@@ -105,17 +110,17 @@ void HaloSystem::run(World& w) {
                 if (claim.load(std::memory_order_relaxed) != 0) continue;
                 if (claim.exchange(1, std::memory_order_relaxed) == 0) out.push_back(j);
             }
-            if (m_with_boundary) bcount += w.boundary_neighbours.count[i];
+            if (m_with_boundary) bcount += boundary_nb->count[i];
         }
     });
-    w.halo_set.clear();
-    for (auto& v : local) w.halo_set.insert(w.halo_set.end(), v.begin(), v.end());
+    halo.clear();
+    for (auto& v : local) halo.insert(halo.end(), v.begin(), v.end());
     // No sort: the order varies with the thread schedule, but nothing depends on it (the
     // propagation writes each halo particle's own minimum, then takes atomic minima).
-    for (Index j : w.halo_set) m_claim[j] = 0;
+    for (Index j : halo) m_claim[j] = 0;
     std::uint64_t b = 0;
     for (auto c : boundary_entries) b += c;
-    w.step.boundary_contributions = b;
+    ctx.write(counter::boundary_contributions) = b;
 }
 
 }  // namespace sph

@@ -16,16 +16,21 @@
 #include <cstdint>
 #include <vector>
 
-#include "engine/system.hpp"
+#include "engine/data/scene.hpp"
+#include "engine/graph/system.hpp"
 
 namespace sph {
 
 class SelectActiveSystem final : public System {
 public:
+    explicit SelectActiveSystem(Activation activation = Activation::Deadline) : m_activation(activation) {}
     std::string name() const override { return "select_active"; }
     Access access() const override;
     void register_components(World& w) override;
-    void run(World& w) override;
+    void run(Context& ctx) override;
+
+private:
+    Activation m_activation;
 };
 
 /// @brief Inactive fluid neighbours of active particles (He Alg. 2, remark after line 22:
@@ -37,7 +42,7 @@ public:
     std::string name() const override { return "halo"; }
     Access access() const override;
     void register_components(World& w) override;
-    void run(World& w) override;
+    void run(Context& ctx) override;
 
 private:
     bool m_with_boundary;

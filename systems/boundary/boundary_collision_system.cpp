@@ -9,18 +9,17 @@
 
 #include <vector>
 
-#include "engine/components.hpp"
-#include "engine/motion.hpp"
-#include "engine/world.hpp"
+#include "engine/data/components.hpp"
+#include "engine/data/motion.hpp"
+#include "engine/data/world.hpp"
+#include "engine/graph/context.hpp"
 
 namespace sph {
 
 Access BoundaryCollisionSystem::access() const {
-    Access a{{res::fluid(comp::position.name), res::fluid(comp::velocity.name)},
-             {res::fluid(comp::position.name), res::fluid(comp::velocity.name), res::collisions,
-              res::fluid(comp::wake.name)}};
-    if (m_moving) a.reads.push_back(res::dt);  // the body's position at the step's end
-    return a;
+    return Access()
+        .write(fluid(comp::position), fluid(comp::velocity), fluid(comp::wake), counter::collisions)
+        .read_if(m_moving, res::dt);  // the body's position at the step's end
 }
 
 namespace {
@@ -112,16 +111,16 @@ bool collide(const BoundaryDesc& b, Vec3& x, Vec3& v) {
 
 }  // namespace
 
-void BoundaryCollisionSystem::run(World& w) {
-    auto x = w.fluid.store.get(comp::position);
-    auto v = w.fluid.store.get(comp::velocity);
+void BoundaryCollisionSystem::run(Context& ctx) {
+    auto x = ctx.write(fluid(comp::position));
+    auto v = ctx.write(fluid(comp::velocity));
     // Each boundary where it is at the end of this step (t + dt), and its velocity then. A
     // static boundary is its declared self with zero velocity.
-    std::vector<BoundaryDesc> boundaries = w.scene.boundaries;
+    std::vector<BoundaryDesc> boundaries = m_boundaries;
     std::vector<Vec3> body_velocity(boundaries.size(), Vec3::Zero());
     bool any_moving = false;
     if (m_moving) {
-        const double t_end = to_seconds(w.step.t_ticks + w.step.dt_ticks);
+        const double t_end = to_seconds(ctx.clock().t_ticks + ctx.read(res::dt).dt_ticks);
         for (std::size_t j = 0; j < boundaries.size(); ++j) {
             if (!boundaries[j].motion) continue;
             boundaries[j] = translated(boundaries[j], displacement(*boundaries[j].motion, t_end));
@@ -130,8 +129,8 @@ void BoundaryCollisionSystem::run(World& w) {
         }
     }
     const std::span<std::uint8_t> wake =
-        w.fluid.store.has(comp::wake.name) ? w.fluid.store.get(comp::wake) : std::span<std::uint8_t>{};
-    w.step.collisions = tbb::parallel_reduce(
+        ctx.has(SetId::Fluid, comp::wake.name) ? ctx.write(fluid(comp::wake)) : std::span<std::uint8_t>{};
+    ctx.write(counter::collisions) = tbb::parallel_reduce(
         tbb::blocked_range<std::size_t>(0, x.size(), 4096), std::uint64_t(0),
         [&](const auto& r, std::uint64_t count) {
             for (std::size_t i = r.begin(); i < r.end(); ++i) {

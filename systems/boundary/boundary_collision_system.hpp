@@ -9,7 +9,10 @@
 /// pressure is clamped at zero), so a thin splash hitting a wall can cross the single
 /// boundary layer. The number of particles corrected each step is reported
 /// (`collisions` in stats.csv); it is zero when the particle boundary alone holds.
-#include "engine/system.hpp"
+#include <vector>
+
+#include "engine/data/scene.hpp"
+#include "engine/graph/system.hpp"
 
 namespace sph {
 
@@ -18,12 +21,15 @@ namespace sph {
 /// relative velocity v - v_b(t + dt) is what gets its component into the body removed.
 class BoundaryCollisionSystem final : public System {
 public:
-    explicit BoundaryCollisionSystem(bool moving = false) : m_moving(moving) {}
+    /// @param boundaries the scene's boundaries (the surfaces to hold the fluid behind).
+    explicit BoundaryCollisionSystem(std::vector<BoundaryDesc> boundaries, bool moving = false)
+        : m_boundaries(std::move(boundaries)), m_moving(moving) {}
     std::string name() const override { return "boundary_collision"; }
     Access access() const override;
-    void run(World& w) override;
+    void run(Context& ctx) override;
 
 private:
+    std::vector<BoundaryDesc> m_boundaries;
     bool m_moving;
 };
 

@@ -8,16 +8,17 @@
 
 #include <limits>
 
-#include "engine/components.hpp"
-#include "engine/motion.hpp"
-#include "engine/world.hpp"
+#include "engine/data/components.hpp"
+#include "engine/data/motion.hpp"
+#include "engine/data/world.hpp"
+#include "engine/graph/context.hpp"
 
 namespace sph {
 
 Access BoundaryMotionSystem::access() const {
-    return {{res::boundary(comp::rest_position.name)},
-            {res::boundary(comp::position.name), res::boundary(comp::velocity.name), res::boundary_grid,
-             res::moving_bodies}};
+    return Access()
+        .read(boundary(comp::rest_position))
+        .write(boundary(comp::position), boundary(comp::velocity), res::boundary_grid, res::moving_bodies);
 }
 
 void BoundaryMotionSystem::register_components(World& w) {
@@ -26,13 +27,13 @@ void BoundaryMotionSystem::register_components(World& w) {
     w.boundary.store.add(comp::velocity);
 }
 
-void BoundaryMotionSystem::run(World& w) {
-    auto x = w.boundary.store.get(comp::position);
-    auto vb = w.boundary.store.get(comp::velocity);
-    const auto x0 = w.boundary.store.get(comp::rest_position);
-    const double t = w.step.t;
-    for (MovingBody& body : w.moving_bodies) {
-        const Motion& motion = *w.scene.boundaries[body.boundary].motion;
+void BoundaryMotionSystem::run(Context& ctx) {
+    auto x = ctx.write(boundary(comp::position));
+    auto vb = ctx.write(boundary(comp::velocity));
+    const auto x0 = ctx.read(boundary(comp::rest_position));
+    const double t = ctx.clock().t;
+    for (MovingBody& body : ctx.write(res::moving_bodies)) {
+        const Motion& motion = *m_boundaries.at(body.boundary).motion;
         const Vec3d d = displacement(motion, t);
         const Vec3 v = velocity(motion, t).cast<Real>();
         using Box = std::pair<Vec3d, Vec3d>;
@@ -55,7 +56,7 @@ void BoundaryMotionSystem::run(World& w) {
         body.speed = speed_bound(motion, t);
     }
     // The grid indexes every boundary particle; rebuilt whole (O(N_b) per step, see header).
-    w.boundary_grid.build(x);
+    ctx.write(res::boundary_grid).build(x);
 }
 
 }  // namespace sph

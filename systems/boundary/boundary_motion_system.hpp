@@ -9,16 +9,24 @@
 /// Cost per step: O(moving-body particles) for the positions, plus the grid rebuild over
 /// *all* boundary particles, O(N_b) work with an O(N_b log N_b) sort of a nearly sorted key
 /// array (UniformGrid::build). Only in the recipe when the scene has a moving boundary.
-#include "engine/system.hpp"
+#include <vector>
+
+#include "engine/data/scene.hpp"
+#include "engine/graph/system.hpp"
 
 namespace sph {
 
 class BoundaryMotionSystem final : public System {
 public:
+    /// @param boundaries the scene's boundaries (a moving body's motion is its boundary's).
+    explicit BoundaryMotionSystem(std::vector<BoundaryDesc> boundaries) : m_boundaries(std::move(boundaries)) {}
     std::string name() const override { return "boundary_motion"; }
     Access access() const override;
     void register_components(World& w) override;
-    void run(World& w) override;
+    void run(Context& ctx) override;
+
+private:
+    std::vector<BoundaryDesc> m_boundaries;
 };
 
 }  // namespace sph

@@ -8,8 +8,9 @@
 #include <cstdint>
 #include <vector>
 
-#include "engine/components.hpp"
-#include "engine/world.hpp"
+#include "engine/data/components.hpp"
+#include "engine/data/world.hpp"
+#include "engine/graph/context.hpp"
 
 namespace sph {
 
@@ -22,18 +23,19 @@ Real boundary_volume_gamma(const CubicSpline& kernel, Real spacing) {
 }
 
 Access BoundaryVolumeSystem::access() const {
-    return {{res::boundary(comp::position.name), res::boundary_grid, res::moving_bodies},
-            {res::boundary(comp::volume.name)}};
+    return Access()
+        .read(boundary(comp::position), res::boundary_grid, res::moving_bodies)
+        .write(boundary(comp::volume));
 }
 
 void BoundaryVolumeSystem::register_components(World& w) { w.boundary.store.add(comp::volume); }
 
-void BoundaryVolumeSystem::run(World& w) {
-    const auto x = w.boundary.store.get(comp::position);
-    auto vol = w.boundary.store.get(comp::volume);
-    const CubicSpline& kernel = w.kernel;
+void BoundaryVolumeSystem::run(Context& ctx) {
+    const auto x = ctx.read(boundary(comp::position));
+    auto vol = ctx.write(boundary(comp::volume));
+    const CubicSpline& kernel = ctx.kernel();
     const Real h2 = kernel.support() * kernel.support();
-    const Real gamma = boundary_volume_gamma(kernel, w.physics.spacing);
+    const Real gamma = boundary_volume_gamma(kernel, ctx.physics().spacing);
     // Moving bodies: Akinci eq. 4 sums over the boundary particles k of the particle's *own*
     // rigid object only: the static boundaries form one group, each moving body another. A
     // body's volumes then depend only on its own sampling, are invariant under its rigid
@@ -42,16 +44,18 @@ void BoundaryVolumeSystem::run(World& w) {
     // both its own and the wall's psi_b = rho0 V_b and so weaken both walls exactly where the
     // fluid between them is squeezed. Static scenes have one group (every particle), unchanged.
     std::vector<std::uint32_t> group;
-    if (!w.moving_bodies.empty()) {
+    const std::vector<MovingBody>& bodies = ctx.read(res::moving_bodies);
+    const UniformGrid& grid = ctx.read(res::boundary_grid);
+    if (!bodies.empty()) {
         group.assign(x.size(), 0);
-        for (std::size_t k = 0; k < w.moving_bodies.size(); ++k)
-            for (std::size_t i = w.moving_bodies[k].begin; i < w.moving_bodies[k].end; ++i)
+        for (std::size_t k = 0; k < bodies.size(); ++k)
+            for (std::size_t i = bodies[k].begin; i < bodies[k].end; ++i)
                 group[i] = std::uint32_t(k + 1);
     }
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 1024), [&](const auto& r) {
         for (std::size_t b = r.begin(); b < r.end(); ++b) {
             Real sum = 0;
-            w.boundary_grid.for_each_candidate(x[b], [&](Index k, const Vec3& xk) {
+            grid.for_each_candidate(x[b], [&](Index k, const Vec3& xk) {
                 if (!group.empty() && group[k] != group[b]) return;
                 const Real d2 = (x[b] - xk).squaredNorm();
                 if (d2 < h2) sum += kernel.w(std::sqrt(d2));

@@ -12,8 +12,8 @@
 ///
 /// Moving bodies: the sum runs over the particle's own rigid object (static boundaries, or
 /// one moving body), so a body's volumes are constant under its translation and computed once.
-#include "engine/kernel.hpp"
-#include "engine/system.hpp"
+#include "engine/core/kernel.hpp"
+#include "engine/graph/system.hpp"
 
 namespace sph {
 
@@ -25,7 +25,7 @@ public:
     std::string name() const override { return "boundary_volume"; }
     Access access() const override;
     void register_components(World& w) override;
-    void run(World& w) override;
+    void run(Context& ctx) override;
 };
 
 }  // namespace sph

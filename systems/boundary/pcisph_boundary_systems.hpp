@@ -4,8 +4,8 @@
 /// constant boundary part of its density (set-up), the active boundary particles (those near
 /// fluid) with their fluid neighbours, and direct forcing (eq. 9-12) on predicted or final
 /// positions.
-#include "engine/system.hpp"
-#include "engine/types.hpp"
+#include "engine/graph/system.hpp"
+#include "engine/core/types.hpp"
 
 namespace sph {
 
@@ -16,7 +16,7 @@ public:
     std::string name() const override { return "boundary_mass"; }
     Access access() const override;
     void register_components(World& w) override;
-    void run(World& w) override;
+    void run(Context& ctx) override;
 };
 
 /// @brief Sec. 3.4: only boundary particles near fluid are active. Inverts the fluid->boundary
@@ -25,7 +25,8 @@ class BoundaryActiveSystem final : public System {
 public:
     std::string name() const override { return "boundary_active"; }
     Access access() const override;
-    void run(World& w) override;
+    void register_components(World& w) override;
+    void run(Context& ctx) override;
 
 private:
     std::vector<Index> m_count;
@@ -36,13 +37,16 @@ private:
 /// ("predict world collision"); otherwise on x(t + dt) and v(t + dt) after integration.
 class DirectForcingSystem final : public System {
 public:
-    DirectForcingSystem(bool predicted, bool moving) : m_predicted(predicted), m_moving(moving) {}
+    /// @param friction the scene's boundary.friction (eq. 12's tangential factor).
+    DirectForcingSystem(bool predicted, bool moving, double friction = 1.0)
+        : m_predicted(predicted), m_moving(moving), m_friction(friction) {}
     std::string name() const override { return m_predicted ? "predict_collision" : "world_collision"; }
     Access access() const override;
-    void run(World& w) override;
+    void run(Context& ctx) override;
 
 private:
     bool m_predicted, m_moving;
+    double m_friction;
 };
 
 }  // namespace sph

@@ -2,19 +2,20 @@
 
 #include <limits>
 
-#include "engine/components.hpp"
-#include "engine/world.hpp"
+#include "engine/data/components.hpp"
+#include "engine/data/world.hpp"
+#include "engine/graph/context.hpp"
 
 namespace sph {
 
 Access NanInjectionSystem::access() const {
-    return {{res::fluid(comp::acceleration.name)}, {res::fluid(comp::acceleration.name)}};
+    return Access().read(fluid(comp::id)).write(fluid(comp::acceleration));
 }
 
-void NanInjectionSystem::run(World& w) {
-    if (w.step.step != m_step) return;
-    const auto id = w.fluid.store.get(comp::id);
-    auto a = w.fluid.store.get(comp::acceleration);
+void NanInjectionSystem::run(Context& ctx) {
+    if (ctx.clock().step != m_step) return;
+    const auto id = ctx.read(fluid(comp::id));
+    auto a = ctx.write(fluid(comp::acceleration));
     for (std::size_t i = 0; i < id.size(); ++i)
         if (id[i] == m_id) a[i].x() = std::numeric_limits<Real>::quiet_NaN();
 }

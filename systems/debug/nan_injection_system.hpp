@@ -4,8 +4,8 @@
 /// step it overwrites one particle's acceleration with NaN, as a broken force term would.
 #include <cstdint>
 
-#include "engine/simulation.hpp"
-#include "engine/system.hpp"
+#include "engine/run/simulation.hpp"
+#include "engine/graph/system.hpp"
 
 namespace sph {
 
@@ -16,7 +16,7 @@ public:
     NanInjectionSystem(std::int64_t step, std::uint32_t particle_id) : m_step(step), m_id(particle_id) {}
     std::string name() const override { return "inject_nan"; }
     Access access() const override;
-    void run(World& world) override;
+    void run(Context& ctx) override;
 
 private:
     std::int64_t m_step;

@@ -3,7 +3,7 @@
 /// @brief Pure per-particle maths of the density phase (testable apart from the loops).
 #include <algorithm>
 
-#include "engine/types.hpp"
+#include "engine/core/types.hpp"
 
 namespace sph {
 

@@ -6,23 +6,20 @@
 
 #include <tbb/parallel_for.h>
 
-#include "engine/components.hpp"
-#include "engine/world.hpp"
+#include "engine/data/components.hpp"
+#include "engine/data/world.hpp"
+#include "engine/graph/context.hpp"
 #include "systems/density/density_kernels.hpp"
 
 namespace sph {
 
 Access DensitySystem::access() const {
-    Access a{{res::fluid(comp::position.name), res::fluid_neighbours},
-             {res::fluid(comp::density.name), res::fluid(comp::pressure.name)}};
-    if (m_with_boundary)
-        a.reads.insert(a.reads.end(), {res::boundary_neighbours, res::boundary(comp::position.name),
-                                       res::boundary(comp::volume.name)});
-    if (m_individual) {
-        a.reads.push_back(res::active_set);
-        a.writes.push_back(res::fluid(comp::density_last.name));
-    }
-    return a;
+    return Access()
+        .read(fluid(comp::position), res::fluid_neighbours)
+        .write(fluid(comp::density), fluid(comp::pressure))
+        .read_if(m_with_boundary, res::boundary_neighbours, boundary(comp::position), boundary(comp::volume))
+        .read_if(m_individual, res::active_set)
+        .write_if(m_individual, fluid(comp::density_last));
 }
 
 void DensitySystem::register_components(World& w) {
@@ -31,23 +28,25 @@ void DensitySystem::register_components(World& w) {
     if (m_individual) w.fluid.store.add(comp::density_last);
 }
 
-void DensitySystem::run(World& w) {
-    const auto x = w.fluid.store.get(comp::position);
-    auto rho = w.fluid.store.get(comp::density);
-    auto p = w.fluid.store.get(comp::pressure);
-    const bool has_boundary = m_with_boundary && w.boundary.size() > 0;
-    const auto xb = w.boundary.store.get(comp::position);
-    const std::span<const Real> vb = has_boundary ? w.boundary.store.get(comp::volume) : std::span<const Real>{};
-    const CubicSpline& kernel = w.kernel;
-    const Physics& ph = w.physics;
+void DensitySystem::run(Context& ctx) {
+    const auto x = ctx.read(fluid(comp::position));
+    auto rho = ctx.write(fluid(comp::density));
+    auto p = ctx.write(fluid(comp::pressure));
+    const bool has_boundary = m_with_boundary && ctx.size(SetId::Boundary) > 0;
+    const auto xb = has_boundary ? ctx.read(boundary(comp::position)) : std::span<const Vec3>{};
+    const std::span<const Real> vb = has_boundary ? ctx.read(boundary(comp::volume)) : std::span<const Real>{};
+    const NeighbourLists& fluid_nb = ctx.read(res::fluid_neighbours);
+    const NeighbourLists* boundary_nb = has_boundary ? &ctx.read(res::boundary_neighbours) : nullptr;
+    const CubicSpline& kernel = ctx.kernel();
+    const Physics& ph = ctx.physics();
     const Real self = ph.mass * kernel.w(0);
     auto summation = [&](Index i) {
         const Vec3 xi = x[i];
         Real sum = 0;
-        for (Index j : w.fluid_neighbours.of(i)) sum += kernel.w((xi - x[j]).norm());
+        for (Index j : fluid_nb.of(i)) sum += kernel.w((xi - x[j]).norm());
         Real bsum = 0;
         if (has_boundary)
-            for (Index b : w.boundary_neighbours.of(i)) bsum += vb[b] * kernel.w((xi - xb[b]).norm());
+            for (Index b : boundary_nb->of(i)) bsum += vb[b] * kernel.w((xi - xb[b]).norm());
         rho[i] = self + ph.mass * sum + ph.rest_density * bsum;
         p[i] = tait_pressure(rho[i], ph.rest_density, ph.tait_b);
     };
@@ -60,8 +59,8 @@ void DensitySystem::run(World& w) {
     // Active particles only (He Alg. 2 lines 6-7); the summed density is also the base of
     // the interpolation rho_i(t) = rho_i(t_last) + (t - t_last) drho_i/dt (line 9), which the
     // asynchronous integration applies to every particle at the end of each step.
-    const auto& active = w.active_set;
-    auto rho_last = w.fluid.store.get(comp::density_last);
+    const auto& active = ctx.read(res::active_set);
+    auto rho_last = ctx.write(fluid(comp::density_last));
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, active.size(), 256), [&](const auto& r) {
         for (std::size_t k = r.begin(); k < r.end(); ++k) {
             summation(active[k]);

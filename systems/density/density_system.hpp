@@ -4,7 +4,7 @@
 /// 2012 eq. 6, then the Tait pressure (He eq. 2). With individual stepping (He Alg. 2
 /// lines 5-9) only active particles are summed, and the sum is kept as their base density;
 /// the interpolation of line 9 happens in the asynchronous integration.
-#include "engine/system.hpp"
+#include "engine/graph/system.hpp"
 
 namespace sph {
 
@@ -17,7 +17,7 @@ public:
     std::string name() const override { return "density"; }
     Access access() const override;
     void register_components(World& w) override;
-    void run(World& w) override;
+    void run(Context& ctx) override;
 
 private:
     bool m_with_boundary, m_individual;

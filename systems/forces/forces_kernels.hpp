@@ -1,7 +1,7 @@
 #pragma once
 /// @file forces_kernels.hpp
 /// @brief Pure pairwise maths of the force phase.
-#include "engine/types.hpp"
+#include "engine/core/types.hpp"
 
 namespace sph {
 

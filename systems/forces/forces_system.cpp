@@ -20,28 +20,24 @@
 
 #include <functional>
 
-#include "engine/components.hpp"
-#include "engine/world.hpp"
+#include "engine/data/components.hpp"
+#include "engine/data/world.hpp"
+#include "engine/graph/context.hpp"
 #include "systems/forces/forces_kernels.hpp"
 #include "systems/timestep/global_dt_system.hpp"
 
 namespace sph {
 
 Access ForcesSystem::access() const {
-    Access a{{res::fluid(comp::position.name), res::fluid(comp::velocity.name), res::fluid(comp::density.name),
-              res::fluid(comp::pressure.name), res::fluid_neighbours},
-             {res::fluid(comp::acceleration.name)}};
-    if (m_with_boundary)
-        a.reads.insert(a.reads.end(), {res::boundary_neighbours, res::boundary(comp::position.name),
-                                       res::boundary(comp::volume.name)});
-    if (m_with_boundary && m_moving_boundary) a.reads.push_back(res::boundary(comp::velocity.name));
-    if (m_corrected) a.reads.push_back(res::fluid(comp::gradient_correction.name));
-    if (m_individual) {
-        a.reads.push_back(res::active_set);
-        a.writes.insert(a.writes.end(), {res::fluid(comp::drho_dt.name), res::fluid(comp::dt_raw.name),
-                                         res::fluid(comp::t_last.name)});
-    }
-    return a;
+    return Access()
+        .read(fluid(comp::position), fluid(comp::velocity), fluid(comp::density), fluid(comp::pressure),
+              res::fluid_neighbours)
+        .write(fluid(comp::acceleration), counter::force_evaluations)
+        .read_if(m_with_boundary, res::boundary_neighbours, boundary(comp::position), boundary(comp::volume))
+        .read_if(m_with_boundary && m_moving_boundary, boundary(comp::velocity))
+        .read_if(m_corrected, fluid(comp::gradient_correction))
+        .read_if(m_individual, res::active_set)
+        .write_if(m_individual, fluid(comp::drho_dt), fluid(comp::dt_raw), fluid(comp::t_last));
 }
 
 void ForcesSystem::register_components(World& w) {
@@ -53,35 +49,37 @@ void ForcesSystem::register_components(World& w) {
     }
 }
 
-void ForcesSystem::run(World& w) {
-    const auto x = w.fluid.store.get(comp::position);
-    const auto v = w.fluid.store.get(comp::velocity);
-    const auto rho = w.fluid.store.get(comp::density);
-    const auto p = w.fluid.store.get(comp::pressure);
-    auto acc = w.fluid.store.get(comp::acceleration);
-    const bool has_boundary = m_with_boundary && w.boundary.size() > 0;
-    const auto xb = w.boundary.store.get(comp::position);
-    const std::span<const Real> vb = has_boundary ? w.boundary.store.get(comp::volume) : std::span<const Real>{};
+void ForcesSystem::run(Context& ctx) {
+    const auto x = ctx.read(fluid(comp::position));
+    const auto v = ctx.read(fluid(comp::velocity));
+    const auto rho = ctx.read(fluid(comp::density));
+    const auto p = ctx.read(fluid(comp::pressure));
+    auto acc = ctx.write(fluid(comp::acceleration));
+    const bool has_boundary = m_with_boundary && ctx.size(SetId::Boundary) > 0;
+    const auto xb = has_boundary ? ctx.read(boundary(comp::position)) : std::span<const Vec3>{};
+    const std::span<const Real> vb = has_boundary ? ctx.read(boundary(comp::volume)) : std::span<const Real>{};
+    const NeighbourLists& fluid_nb = ctx.read(res::fluid_neighbours);
+    const NeighbourLists* boundary_nb = has_boundary ? &ctx.read(res::boundary_neighbours) : nullptr;
     // Boundary velocities (moving bodies; zero rows for static particles). Absent in static
     // scenes, whose arithmetic is then exactly the static formula.
-    const std::span<const Vec3> vel_b = has_boundary && m_moving_boundary && w.boundary.store.has(comp::velocity.name)
-                                            ? std::span<const Vec3>(w.boundary.store.get(comp::velocity))
-                                            : std::span<const Vec3>{};
+    const std::span<const Vec3> vel_b =
+        has_boundary && m_moving_boundary && ctx.has(SetId::Boundary, comp::velocity.name)
+            ? ctx.read(boundary(comp::velocity))
+            : std::span<const Vec3>{};
     const bool moving = !vel_b.empty();
-    const CubicSpline& kernel = w.kernel;
-    const Physics& ph = w.physics;
+    const CubicSpline& kernel = ctx.kernel();
+    const Physics& ph = ctx.physics();
     const Real m = ph.mass, alpha = ph.viscosity, c = ph.speed_of_sound, h = ph.h, rho0 = ph.rest_density;
     const Real alpha_b = ph.boundary_viscosity;  // 0: free-slip walls (pressure force only)
     const Vec3 g = ph.gravity;
     std::span<Real> drho;
     std::span<double> dt_raw;
     if (m_individual) {
-        drho = w.fluid.store.get(comp::drho_dt);
-        dt_raw = w.fluid.store.get(comp::dt_raw);
+        drho = ctx.write(fluid(comp::drho_dt));
+        dt_raw = ctx.write(fluid(comp::dt_raw));
     }
-    const std::span<const Mat3> L =
-        m_corrected ? std::span<const Mat3>(w.fluid.store.get(comp::gradient_correction)) : std::span<const Mat3>{};
-    const SteppingParams& stepping = w.scene.simulation.stepping;
+    const std::span<const Mat3> L = m_corrected ? ctx.read(fluid(comp::gradient_correction)) : std::span<const Mat3>{};
+    const SteppingParams& stepping = m_stepping;
     // The mode and the gradient form are template parameters, so the `global`/`constant` loop
     // carries no per-neighbour branches for the individual-only sums or the correction.
     auto evaluate = [&]<bool Individual, bool Corrected>(Index i) {
@@ -90,7 +88,7 @@ void ForcesSystem::run(World& w) {
         const Real pi = p[i] / (rhoi * rhoi);
         Vec3 a = Vec3::Zero();
         Real div = 0;  // He eq. 5
-        for (Index j : w.fluid_neighbours.of(i)) {
+        for (Index j : fluid_nb.of(i)) {
             const Vec3 xij = xi - x[j];
             const Real r2 = xij.squaredNorm();
             const Vec3 grad = kernel.grad(xij, std::sqrt(r2));
@@ -103,7 +101,7 @@ void ForcesSystem::run(World& w) {
             if constexpr (Individual) div += m * vij.dot(grad);
         }
         if (has_boundary) {
-            for (Index b : w.boundary_neighbours.of(i)) {
+            for (Index b : boundary_nb->of(i)) {
                 const Vec3 xib = xi - xb[b];
                 const Real r2 = xib.squaredNorm();
                 const Vec3 grad = kernel.grad(xib, std::sqrt(r2));
@@ -133,14 +131,14 @@ void ForcesSystem::run(World& w) {
                     evaluate.template operator()<false, false>(Index(i));
             }
         });
-        w.step.force_evaluations = x.size();
+        ctx.write(counter::force_evaluations) = x.size();
         return;
     }
     // He Alg. 2 lines 10-14: active particles only; each evaluation stamps t_last = t_sim.
-    const auto& active = w.active_set;
-    auto t_last = w.fluid.store.get(comp::t_last);
-    const Tick now = w.step.t_ticks;
-    w.step.force_evaluations = tbb::parallel_reduce(
+    const auto& active = ctx.read(res::active_set);
+    auto t_last = ctx.write(fluid(comp::t_last));
+    const Tick now = ctx.clock().t_ticks;
+    ctx.write(counter::force_evaluations) = tbb::parallel_reduce(
         tbb::blocked_range<std::size_t>(0, active.size(), 128), std::uint64_t(0),
         [&](const auto& r, std::uint64_t done) {
             for (std::size_t k = r.begin(); k < r.end(); ++k) {

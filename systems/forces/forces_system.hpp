@@ -9,25 +9,29 @@
 /// With `corrected` (scene `fluid.pressure_gradient`) the pressure terms use the corrected
 /// gradient (L_i + L_j)/2 grad W_ij against fluid and L_i grad W_ib against the boundary
 /// (Bonet & Lok 1999; L from GradientCorrectionSystem); viscosity keeps grad W.
-#include "engine/system.hpp"
+#include "engine/data/scene.hpp"
+#include "engine/graph/system.hpp"
 
 namespace sph {
 
 class ForcesSystem final : public System {
 public:
+    /// @param stepping the step rules of Delta t_i^raw (individual stepping only).
     explicit ForcesSystem(bool with_boundary, bool individual = false, bool moving_boundary = false,
-                          bool corrected = false)
+                          bool corrected = false, SteppingParams stepping = {})
         : m_with_boundary(with_boundary),
           m_individual(individual),
           m_moving_boundary(moving_boundary),
-          m_corrected(corrected) {}
+          m_corrected(corrected),
+          m_stepping(stepping) {}
     std::string name() const override { return "forces"; }
     Access access() const override;
     void register_components(World& w) override;
-    void run(World& w) override;
+    void run(Context& ctx) override;
 
 private:
     bool m_with_boundary, m_individual, m_moving_boundary, m_corrected;
+    SteppingParams m_stepping;
 };
 
 }  // namespace sph

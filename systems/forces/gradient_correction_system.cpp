@@ -10,8 +10,9 @@
 #include <cmath>
 #include <limits>
 
-#include "engine/components.hpp"
-#include "engine/world.hpp"
+#include "engine/data/components.hpp"
+#include "engine/data/world.hpp"
+#include "engine/graph/context.hpp"
 
 namespace sph {
 
@@ -31,35 +32,35 @@ Mat3 inverse_moment(const Mat3& moment, Real min_eigenvalue) {
 }
 
 Access GradientCorrectionSystem::access() const {
-    Access a{{res::fluid(comp::position.name), res::fluid(comp::density.name), res::fluid_neighbours},
-             {res::fluid(comp::gradient_correction.name)}};
-    if (m_with_boundary)
-        a.reads.insert(a.reads.end(), {res::boundary_neighbours, res::boundary(comp::position.name),
-                                       res::boundary(comp::volume.name)});
-    if (m_individual) a.reads.push_back(res::active_set);
-    return a;
+    return Access()
+        .read(fluid(comp::position), fluid(comp::density), res::fluid_neighbours)
+        .write(fluid(comp::gradient_correction))
+        .read_if(m_with_boundary, res::boundary_neighbours, boundary(comp::position), boundary(comp::volume))
+        .read_if(m_individual, res::active_set);
 }
 
 void GradientCorrectionSystem::register_components(World& w) { w.fluid.store.add(comp::gradient_correction); }
 
-void GradientCorrectionSystem::run(World& w) {
-    const auto x = w.fluid.store.get(comp::position);
-    const auto rho = w.fluid.store.get(comp::density);
-    auto L = w.fluid.store.get(comp::gradient_correction);
-    const bool has_boundary = m_with_boundary && w.boundary.size() > 0;
-    const auto xb = w.boundary.store.get(comp::position);
-    const std::span<const Real> vb = has_boundary ? w.boundary.store.get(comp::volume) : std::span<const Real>{};
-    const CubicSpline& kernel = w.kernel;
-    const Real m = w.physics.mass;
+void GradientCorrectionSystem::run(Context& ctx) {
+    const auto x = ctx.read(fluid(comp::position));
+    const auto rho = ctx.read(fluid(comp::density));
+    auto L = ctx.write(fluid(comp::gradient_correction));
+    const bool has_boundary = m_with_boundary && ctx.size(SetId::Boundary) > 0;
+    const auto xb = has_boundary ? ctx.read(boundary(comp::position)) : std::span<const Vec3>{};
+    const std::span<const Real> vb = has_boundary ? ctx.read(boundary(comp::volume)) : std::span<const Real>{};
+    const NeighbourLists& fluid_nb = ctx.read(res::fluid_neighbours);
+    const NeighbourLists* boundary_nb = has_boundary ? &ctx.read(res::boundary_neighbours) : nullptr;
+    const CubicSpline& kernel = ctx.kernel();
+    const Real m = ctx.physics().mass;
     auto correct = [&](Index i) {
         const Vec3 xi = x[i];
         Mat3 moment = Mat3::Zero();
-        for (Index j : w.fluid_neighbours.of(i)) {
+        for (Index j : fluid_nb.of(i)) {
             const Vec3 xij = xi - x[j];
             moment.noalias() -= (m / rho[j]) * kernel.grad(xij, xij.norm()) * xij.transpose();
         }
         if (has_boundary)
-            for (Index b : w.boundary_neighbours.of(i)) {
+            for (Index b : boundary_nb->of(i)) {
                 const Vec3 xib = xi - xb[b];
                 moment.noalias() -= vb[b] * kernel.grad(xib, xib.norm()) * xib.transpose();
             }
@@ -71,7 +72,7 @@ void GradientCorrectionSystem::run(World& w) {
         });
         return;
     }
-    const auto& active = w.active_set;
+    const auto& active = ctx.read(res::active_set);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, active.size(), 256), [&](const auto& r) {
         for (std::size_t k = r.begin(); k < r.end(); ++k) correct(active[k]);
     });

@@ -15,8 +15,8 @@
 /// most doubles the gradient along a missing direction instead of amplifying it without bound.
 /// With individual stepping only active particles are updated (He et al. Alg. 2: inactive
 /// particles keep the L_i of their last evaluation, as they keep their neighbour lists).
-#include "engine/system.hpp"
-#include "engine/types.hpp"
+#include "engine/graph/system.hpp"
+#include "engine/core/types.hpp"
 
 namespace sph {
 
@@ -34,7 +34,7 @@ public:
     std::string name() const override { return "gradient_correction"; }
     Access access() const override;
     void register_components(World& w) override;
-    void run(World& w) override;
+    void run(Context& ctx) override;
 
 private:
     bool m_with_boundary, m_individual;

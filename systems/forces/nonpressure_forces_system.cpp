@@ -9,43 +9,44 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
-#include "engine/components.hpp"
-#include "engine/world.hpp"
+#include "engine/data/components.hpp"
+#include "engine/data/world.hpp"
+#include "engine/graph/context.hpp"
 #include "systems/forces/forces_kernels.hpp"
 
 namespace sph {
 
 Access NonpressureForcesSystem::access() const {
-    Access a{{res::fluid(comp::position.name), res::fluid(comp::velocity.name), res::fluid_neighbours},
-             {res::fluid(comp::nonpressure_acceleration.name)}};
-    if (m_boundary)
-        a.reads.insert(a.reads.end(),
-                       {res::boundary_neighbours, res::boundary(comp::position.name), res::boundary(comp::volume.name)});
-    if (m_boundary && m_moving) a.reads.push_back(res::boundary(comp::velocity.name));
-    return a;
+    return Access()
+        .read(fluid(comp::position), fluid(comp::velocity), res::fluid_neighbours)
+        .write(fluid(comp::nonpressure_acceleration))
+        .read_if(m_boundary, res::boundary_neighbours, boundary(comp::position), boundary(comp::volume))
+        .read_if(m_boundary && m_moving, boundary(comp::velocity));
 }
 
 void NonpressureForcesSystem::register_components(World& w) { w.fluid.store.add(comp::nonpressure_acceleration); }
 
-void NonpressureForcesSystem::run(World& w) {
-    const auto x = w.fluid.store.get(comp::position);
-    const auto v = w.fluid.store.get(comp::velocity);
-    auto out = w.fluid.store.get(comp::nonpressure_acceleration);
-    const bool with_boundary = m_boundary && w.boundary.size() > 0;
-    const auto xb = w.boundary.store.get(comp::position);
-    const std::span<const Real> vol = with_boundary ? w.boundary.store.get(comp::volume) : std::span<const Real>{};
-    const std::span<const Vec3> velb = with_boundary && m_moving && w.boundary.store.has(comp::velocity.name)
-                                           ? std::span<const Vec3>(w.boundary.store.get(comp::velocity))
+void NonpressureForcesSystem::run(Context& ctx) {
+    const auto x = ctx.read(fluid(comp::position));
+    const auto v = ctx.read(fluid(comp::velocity));
+    auto out = ctx.write(fluid(comp::nonpressure_acceleration));
+    const bool with_boundary = m_boundary && ctx.size(SetId::Boundary) > 0;
+    const auto xb = with_boundary ? ctx.read(boundary(comp::position)) : std::span<const Vec3>{};
+    const std::span<const Real> vol = with_boundary ? ctx.read(boundary(comp::volume)) : std::span<const Real>{};
+    const std::span<const Vec3> velb = with_boundary && m_moving && ctx.has(SetId::Boundary, comp::velocity.name)
+                                           ? ctx.read(boundary(comp::velocity))
                                            : std::span<const Vec3>{};
-    const CubicSpline& kernel = w.kernel;
-    const Physics& ph = w.physics;
+    const NeighbourLists& fluid_nb = ctx.read(res::fluid_neighbours);
+    const NeighbourLists* boundary_nb = with_boundary ? &ctx.read(res::boundary_neighbours) : nullptr;
+    const CubicSpline& kernel = ctx.kernel();
+    const Physics& ph = ctx.physics();
     const Real m = ph.mass, alpha = ph.viscosity, c = ph.speed_of_sound, h = ph.h, rho0 = ph.rest_density;
-    const Real kappa = Real(w.scene.fluid.surface_tension);
+    const Real kappa = Real(m_surface_tension);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 512), [&](const auto& r) {
         for (std::size_t i = r.begin(); i < r.end(); ++i) {
             const Vec3 xi = x[i], vi = v[i];
             Vec3 a = Vec3::Zero();
-            for (Index j : w.fluid_neighbours.of(Index(i))) {
+            for (Index j : fluid_nb.of(Index(i))) {
                 const Vec3 xij = xi - x[j];
                 const Real r2 = xij.squaredNorm(), d = std::sqrt(r2);
                 if (alpha > 0) {
@@ -55,7 +56,7 @@ void NonpressureForcesSystem::run(World& w) {
                 if (kappa > 0) a -= (kappa * kernel.w(d)) * xij;
             }
             if (with_boundary && alpha > 0)
-                for (Index b : w.boundary_neighbours.of(Index(i))) {
+                for (Index b : boundary_nb->of(Index(i))) {
                     const Vec3 xib = xi - xb[b];
                     const Real r2 = xib.squaredNorm();
                     const Vec3 vib = velb.empty() ? vi : Vec3(vi - velb[b]);

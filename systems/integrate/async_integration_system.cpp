@@ -7,17 +7,19 @@
 
 #include <tbb/parallel_for.h>
 
-#include "engine/components.hpp"
-#include "engine/world.hpp"
+#include "engine/data/components.hpp"
+#include "engine/data/world.hpp"
+#include "engine/graph/context.hpp"
 #include "systems/density/density_kernels.hpp"
 
 namespace sph {
 
 Access AsyncIntegrationSystem::access() const {
-    return {{res::fluid(comp::acceleration.name), res::fluid(comp::active.name), res::fluid(comp::t_last.name),
-             res::fluid(comp::drho_dt.name), res::fluid(comp::density_last.name), res::dt},
-            {res::fluid(comp::velocity.name), res::fluid(comp::position.name), res::fluid(comp::position_last.name),
-             res::fluid(comp::velocity_last.name), res::fluid(comp::density.name), res::fluid(comp::pressure.name)}};
+    return Access()
+        .read(fluid(comp::acceleration), fluid(comp::active), fluid(comp::t_last), fluid(comp::drho_dt),
+              fluid(comp::density_last), res::dt)
+        .write(fluid(comp::velocity), fluid(comp::position), fluid(comp::position_last), fluid(comp::velocity_last),
+               fluid(comp::density), fluid(comp::pressure));
 }
 
 void AsyncIntegrationSystem::register_components(World& w) {
@@ -29,20 +31,20 @@ void AsyncIntegrationSystem::register_components(World& w) {
     w.fluid.store.add(comp::active);
 }
 
-void AsyncIntegrationSystem::run(World& w) {
-    auto x = w.fluid.store.get(comp::position);
-    auto v = w.fluid.store.get(comp::velocity);
-    auto x0 = w.fluid.store.get(comp::position_last);
-    auto v0 = w.fluid.store.get(comp::velocity_last);
-    auto rho = w.fluid.store.get(comp::density);
-    auto p = w.fluid.store.get(comp::pressure);
-    const auto a = w.fluid.store.get(comp::acceleration);
-    const auto active = w.fluid.store.get(comp::active);
-    const auto t_last = w.fluid.store.get(comp::t_last);
-    const auto drho = w.fluid.store.get(comp::drho_dt);
-    const auto rho0 = w.fluid.store.get(comp::density_last);
-    const Tick t_end = w.step.t_ticks + w.step.dt_ticks;
-    const Real rest = w.physics.rest_density, b = w.physics.tait_b;
+void AsyncIntegrationSystem::run(Context& ctx) {
+    auto x = ctx.write(fluid(comp::position));
+    auto v = ctx.write(fluid(comp::velocity));
+    auto x0 = ctx.write(fluid(comp::position_last));
+    auto v0 = ctx.write(fluid(comp::velocity_last));
+    auto rho = ctx.write(fluid(comp::density));
+    auto p = ctx.write(fluid(comp::pressure));
+    const auto a = ctx.read(fluid(comp::acceleration));
+    const auto active = ctx.read(fluid(comp::active));
+    const auto t_last = ctx.read(fluid(comp::t_last));
+    const auto drho = ctx.read(fluid(comp::drho_dt));
+    const auto rho0 = ctx.read(fluid(comp::density_last));
+    const Tick t_end = ctx.clock().t_ticks + ctx.read(res::dt).dt_ticks;
+    const Real rest = ctx.physics().rest_density, b = ctx.physics().tait_b;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 4096), [&](const auto& r) {
         for (std::size_t i = r.begin(); i < r.end(); ++i) {
             if (active[i]) {  // evaluated now: this is its new base state (t_last = t_sim)

@@ -5,7 +5,7 @@
 /// captured when it is active), never by accumulating increments. Line 9's interpolation
 /// rho_i = rho_i(t_last) + (t - t_last) drho_i/dt and the Tait pressure are applied in the
 /// same pass, so every particle carries density and pressure at the new time.
-#include "engine/system.hpp"
+#include "engine/graph/system.hpp"
 
 namespace sph {
 
@@ -14,7 +14,7 @@ public:
     std::string name() const override { return "async_integrate"; }
     Access access() const override;
     void register_components(World& w) override;
-    void run(World& w) override;
+    void run(Context& ctx) override;
 };
 
 }  // namespace sph

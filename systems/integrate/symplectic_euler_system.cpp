@@ -3,21 +3,21 @@
 
 #include <tbb/parallel_for.h>
 
-#include "engine/components.hpp"
-#include "engine/world.hpp"
+#include "engine/data/components.hpp"
+#include "engine/data/world.hpp"
+#include "engine/graph/context.hpp"
 
 namespace sph {
 
 Access SymplecticEulerSystem::access() const {
-    return {{res::fluid(comp::acceleration.name), res::dt},
-            {res::fluid(comp::velocity.name), res::fluid(comp::position.name)}};
+    return Access().read(fluid(comp::acceleration), res::dt).write(fluid(comp::velocity), fluid(comp::position));
 }
 
-void SymplecticEulerSystem::run(World& w) {
-    auto x = w.fluid.store.get(comp::position);
-    auto v = w.fluid.store.get(comp::velocity);
-    const auto a = w.fluid.store.get(comp::acceleration);
-    const Real dt = Real(w.step.dt);
+void SymplecticEulerSystem::run(Context& ctx) {
+    auto x = ctx.write(fluid(comp::position));
+    auto v = ctx.write(fluid(comp::velocity));
+    const auto a = ctx.read(fluid(comp::acceleration));
+    const Real dt = Real(ctx.read(res::dt).dt);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 4096), [&](const auto& r) {
         for (std::size_t i = r.begin(); i < r.end(); ++i) {
             v[i] += dt * a[i];

@@ -2,7 +2,7 @@
 /// @file pcisph.hpp
 /// @brief PCISPH with the boundary handling and adaptive time step of Ihmsen et al. 2010
 /// (Alg. 2), as a recipe of flow-graph systems chosen from the scene.
-#include "engine/simulation.hpp"
+#include "engine/run/simulation.hpp"
 
 namespace sph {
 

@@ -1,7 +1,6 @@
 #include "systems/methods/wcsph.hpp"
 
 #include "systems/active/select_active_system.hpp"
-#include "systems/methods/pcisph.hpp"
 #include "systems/boundary/boundary_collision_system.hpp"
 #include "systems/boundary/boundary_motion_system.hpp"
 #include "systems/boundary/boundary_volume_system.hpp"
@@ -25,9 +24,11 @@ Recipe make_wcsph_recipe(const Scene& scene) {
     const bool moving = has_moving_boundaries(scene);
     if (boundary) r.setup.push_back(std::make_unique<BoundaryVolumeSystem>());
     // Kinematic boundaries are placed at the step's time before anything reads them.
-    if (moving) r.step.push_back(std::make_unique<BoundaryMotionSystem>());
+    if (moving) r.step.push_back(std::make_unique<BoundaryMotionSystem>(scene.boundaries));
     // He et al. Alg. 2 (individual) or Alg. 1 with eq. 6-8 (global) / a fixed step (constant).
-    if (individual) r.step.push_back(std::make_unique<SelectActiveSystem>());
+    const SteppingParams& stepping = scene.simulation.stepping;
+    if (mode == SteppingMode::Constant) r.step.push_back(std::make_unique<ConstantDtSystem>(stepping.dt));
+    if (individual) r.step.push_back(std::make_unique<SelectActiveSystem>(stepping.activation));
     r.step.push_back(std::make_unique<FluidGridSystem>());
     r.step.push_back(std::make_unique<FluidNeighbourSystem>(individual));
     if (boundary) r.step.push_back(std::make_unique<BoundaryNeighbourSystem>(individual));
@@ -35,32 +36,18 @@ Recipe make_wcsph_recipe(const Scene& scene) {
     r.step.push_back(std::make_unique<DensitySystem>(boundary, individual));
     const bool corrected = scene.fluid.pressure_gradient == PressureGradient::Corrected;
     if (corrected) r.step.push_back(std::make_unique<GradientCorrectionSystem>(boundary, individual));
-    r.step.push_back(std::make_unique<ForcesSystem>(boundary, individual, moving, corrected));
+    r.step.push_back(std::make_unique<ForcesSystem>(boundary, individual, moving, corrected, stepping));
     r.step.push_back(std::make_unique<StepStatsSystem>(individual));
     if (individual) {
         r.step.push_back(std::make_unique<DtPropagationSystem>());
-        r.step.push_back(std::make_unique<IndividualGlobalDtSystem>());
+        r.step.push_back(std::make_unique<IndividualGlobalDtSystem>(stepping.activation, stepping.dt_max));
         r.step.push_back(std::make_unique<AsyncIntegrationSystem>());
     } else {
-        if (mode == SteppingMode::Global) r.step.push_back(std::make_unique<GlobalDtSystem>());
+        if (mode == SteppingMode::Global) r.step.push_back(std::make_unique<GlobalDtSystem>(stepping));
         r.step.push_back(std::make_unique<SymplecticEulerSystem>());
     }
-    if (boundary) r.step.push_back(std::make_unique<BoundaryCollisionSystem>(moving));
+    if (boundary) r.step.push_back(std::make_unique<BoundaryCollisionSystem>(scene.boundaries, moving));
     return r;
-}
-
-Recipe make_recipe(const Scene& scene) {
-    switch (scene.simulation.method) {
-        case Method::Wcsph:
-            return make_wcsph_recipe(scene);
-        case Method::Pcisph:
-            return make_pcisph_recipe(scene);
-    }
-    return make_wcsph_recipe(scene);
-}
-
-std::unique_ptr<Simulation> make_simulation(const Scene& scene) {
-    return std::make_unique<Simulation>(scene, make_recipe(scene));
 }
 
 }  // namespace sph

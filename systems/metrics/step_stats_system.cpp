@@ -3,17 +3,18 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_reduce.h>
 
-#include "engine/components.hpp"
-#include "engine/world.hpp"
+#include "engine/data/components.hpp"
+#include "engine/data/world.hpp"
+#include "engine/graph/context.hpp"
 
 namespace sph {
 
 Access StepStatsSystem::access() const {
-    Access a{{res::fluid(comp::density.name), res::fluid(comp::velocity.name), res::fluid(comp::acceleration.name),
-              res::fluid_neighbours},
-             {res::stats}};
-    if (m_individual) a.reads.insert(a.reads.end(), {res::fluid(comp::active.name), res::active_set});
-    return a;
+    return Access()
+        .read(fluid(comp::density), fluid(comp::velocity), fluid(comp::acceleration), res::fluid_neighbours)
+        .write(res::stats, counter::updated, counter::neighbour_pairs)
+        .read_if(m_individual, fluid(comp::active), res::active_set, counter::active)
+        .write_if(!m_individual, counter::active);
 }
 
 namespace {
@@ -24,15 +25,15 @@ struct Acc {
 };
 }  // namespace
 
-void StepStatsSystem::run(World& w) {
-    const auto rho = w.fluid.store.get(comp::density);
-    const auto v = w.fluid.store.get(comp::velocity);
-    const auto a = w.fluid.store.get(comp::acceleration);
-    const double rho0 = w.physics.rest_density;
-    const auto& counts = w.fluid_neighbours.count;
+void StepStatsSystem::run(Context& ctx) {
+    const auto rho = ctx.read(fluid(comp::density));
+    const auto v = ctx.read(fluid(comp::velocity));
+    const auto a = ctx.read(fluid(comp::acceleration));
+    const double rho0 = ctx.physics().rest_density;
+    const auto& counts = ctx.read(res::fluid_neighbours).count;
     const std::size_t n = rho.size();
     // Individual stepping: neighbour pairs and the updated count are those of the active set.
-    const std::uint8_t* is_active = m_individual ? w.fluid.store.get(comp::active).data() : nullptr;
+    const std::uint8_t* is_active = m_individual ? ctx.read(fluid(comp::active)).data() : nullptr;
     // Deterministic reduction: the same sums whatever the thread count.
     const Acc r = tbb::parallel_deterministic_reduce(
         tbb::blocked_range<std::size_t>(0, n, 1024), Acc{},
@@ -62,15 +63,15 @@ void StepStatsSystem::run(World& w) {
             x.pairs += y.pairs;
             return x;
         });
-    StepState& s = w.step;
+    StepStats& s = ctx.write(res::stats);
     s.rho_err_avg = n ? r.err_sum / double(n) : 0.0;
     s.rho_err_max = r.err_max;
     s.v_max = std::sqrt(r.v2_max);
     s.a_max = std::sqrt(r.a2_max);
     s.a_max_particle = r.a_arg;
-    s.updated = m_individual ? s.active : n;
-    if (!m_individual) s.active = n;
-    s.neighbour_pairs = r.pairs;
+    ctx.write(counter::updated) = m_individual ? ctx.read(counter::active) : n;
+    if (!m_individual) ctx.write(counter::active) = n;
+    ctx.write(counter::neighbour_pairs) = r.pairs;
 }
 
 }  // namespace sph

@@ -2,7 +2,7 @@
 /// @file step_stats_system.hpp
 /// @brief Per-step diagnostics: density error avg/max (rho_err = max(rho/rho0 - 1, 0)),
 /// v_max and a_max (He eq. 6-7 need them), particles updated and neighbour pairs.
-#include "engine/system.hpp"
+#include "engine/graph/system.hpp"
 
 namespace sph {
 
@@ -12,7 +12,7 @@ public:
     explicit StepStatsSystem(bool individual = false) : m_individual(individual) {}
     std::string name() const override { return "step_stats"; }
     Access access() const override;
-    void run(World& w) override;
+    void run(Context& ctx) override;
 
 private:
     bool m_individual;

@@ -3,7 +3,7 @@
 /// @brief He et al. Alg. 1 line 3 / Alg. 2 line 4: find neighbours. The fluid grid is rebuilt
 /// every step; fluid->fluid and fluid->boundary lists are built by two independent systems
 /// (they run concurrently in the graph).
-#include "engine/system.hpp"
+#include "engine/graph/system.hpp"
 
 namespace sph {
 
@@ -12,7 +12,7 @@ class FluidGridSystem final : public System {
 public:
     std::string name() const override { return "fluid_grid"; }
     Access access() const override;
-    void run(World& w) override;
+    void run(Context& ctx) override;
 };
 
 /// @brief Fluid->fluid neighbour lists (r < h, self excluded) of every fluid particle, or
@@ -23,7 +23,7 @@ public:
     explicit FluidNeighbourSystem(bool individual = false) : m_individual(individual) {}
     std::string name() const override { return "fluid_neighbours"; }
     Access access() const override;
-    void run(World& w) override;
+    void run(Context& ctx) override;
 
 private:
     bool m_individual;
@@ -37,7 +37,7 @@ public:
     explicit BoundaryNeighbourSystem(bool individual = false) : m_individual(individual) {}
     std::string name() const override { return "boundary_neighbours"; }
     Access access() const override;
-    void run(World& w) override;
+    void run(Context& ctx) override;
 
 private:
     bool m_individual;

@@ -5,8 +5,8 @@
 #include <cmath>
 #include <span>
 
-#include "engine/kernel.hpp"
-#include "engine/types.hpp"
+#include "engine/core/kernel.hpp"
+#include "engine/core/types.hpp"
 
 namespace sph {
 

@@ -11,38 +11,39 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
-#include "engine/components.hpp"
-#include "engine/world.hpp"
+#include "engine/data/components.hpp"
+#include "engine/data/world.hpp"
+#include "engine/graph/context.hpp"
 #include "systems/pcisph/pcisph_kernels.hpp"
+#include "systems/pcisph/pcisph_state.hpp"
 #include "systems/pcisph/pcisph_systems.hpp"
 
 namespace sph {
 
 namespace {
-const std::string x_pred = res::fluid(comp::predicted_position.name);
+constexpr ColumnRef<Vec3> x_pred = fluid(comp::predicted_position);
 }
 
 // ---- predict ----
 
 Access PcisphPredictSystem::access() const {
-    Access a{{res::fluid(comp::position.name), res::fluid(comp::velocity.name),
-              res::fluid(comp::pressure_acceleration.name), res::dt},
-             {x_pred}};
-    if (m_nonpressure) a.reads.push_back(res::fluid(comp::nonpressure_acceleration.name));
-    return a;
+    return Access()
+        .read(fluid(comp::position), fluid(comp::velocity), fluid(comp::pressure_acceleration), res::dt)
+        .write(x_pred)
+        .read_if(m_nonpressure, fluid(comp::nonpressure_acceleration));
 }
 
 void PcisphPredictSystem::register_components(World& w) { w.fluid.store.add(comp::predicted_position); }
 
-void PcisphPredictSystem::run(World& w) {
-    const auto x = w.fluid.store.get(comp::position);
-    const auto v = w.fluid.store.get(comp::velocity);
-    const auto ap = w.fluid.store.get(comp::pressure_acceleration);
+void PcisphPredictSystem::run(Context& ctx) {
+    const auto x = ctx.read(fluid(comp::position));
+    const auto v = ctx.read(fluid(comp::velocity));
+    const auto ap = ctx.read(fluid(comp::pressure_acceleration));
     const std::span<const Vec3> anp =
-        m_nonpressure ? std::span<const Vec3>(w.fluid.store.get(comp::nonpressure_acceleration)) : std::span<const Vec3>{};
-    auto xs = w.fluid.store.get(comp::predicted_position);
-    const Real dt = Real(w.step.dt);
-    const Vec3 g = w.physics.gravity;
+        m_nonpressure ? ctx.read(fluid(comp::nonpressure_acceleration)) : std::span<const Vec3>{};
+    auto xs = ctx.write(fluid(comp::predicted_position));
+    const Real dt = Real(ctx.read(res::dt).dt);
+    const Vec3 g = ctx.physics().gravity;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 4096), [&](const auto& r) {
         for (std::size_t i = r.begin(); i < r.end(); ++i) {
             Vec3 a = g + ap[i];
@@ -55,17 +56,16 @@ void PcisphPredictSystem::run(World& w) {
 // ---- fluid density and pressure ----
 
 Access PcisphDensitySystem::access() const {
-    Access a{{x_pred, res::fluid_neighbours, res::pcisph_delta},
-             {res::fluid(comp::density.name), res::fluid(comp::pressure.name), res::pcisph_errors}};
-    if (m_ihmsen)
-        a.reads.insert(a.reads.end(),
-                       {res::boundary_neighbours, res::boundary(comp::position.name), res::boundary(comp::mass.name)});
-    return a;
+    return Access()
+        .read(x_pred, res::fluid_neighbours, res::pcisph_delta)
+        .write(fluid(comp::density), fluid(comp::pressure), res::pcisph_errors)
+        .read_if(m_ihmsen, res::boundary_neighbours, boundary(comp::position), boundary(comp::mass));
 }
 
 void PcisphDensitySystem::register_components(World& w) {
     w.fluid.store.add(comp::density);
     w.fluid.store.add(comp::pressure);
+    w.resources.add<PcisphErrors>(res::pcisph_errors.name, Lifetime::Scratch);
 }
 
 namespace {
@@ -74,16 +74,18 @@ struct ErrAcc {
 };
 }  // namespace
 
-void PcisphDensitySystem::run(World& w) {
-    const auto xs = w.fluid.store.get(comp::predicted_position);
-    auto rho = w.fluid.store.get(comp::density);
-    auto p = w.fluid.store.get(comp::pressure);
-    const bool with_boundary = m_ihmsen && w.boundary.size() > 0;
-    const auto xb = w.boundary.store.get(comp::position);
-    const std::span<const Real> mb = with_boundary ? w.boundary.store.get(comp::mass) : std::span<const Real>{};
-    const CubicSpline& kernel = w.kernel;
-    const Real m = w.physics.mass, rho0 = w.physics.rest_density, self = m * kernel.w(0);
-    const Real delta = Real(w.pcisph.delta);
+void PcisphDensitySystem::run(Context& ctx) {
+    const auto xs = ctx.read(fluid(comp::predicted_position));
+    auto rho = ctx.write(fluid(comp::density));
+    auto p = ctx.write(fluid(comp::pressure));
+    const bool with_boundary = m_ihmsen && ctx.size(SetId::Boundary) > 0;
+    const auto xb = with_boundary ? ctx.read(boundary(comp::position)) : std::span<const Vec3>{};
+    const std::span<const Real> mb = with_boundary ? ctx.read(boundary(comp::mass)) : std::span<const Real>{};
+    const NeighbourLists& fluid_nb = ctx.read(res::fluid_neighbours);
+    const NeighbourLists* boundary_nb = with_boundary ? &ctx.read(res::boundary_neighbours) : nullptr;
+    const CubicSpline& kernel = ctx.kernel();
+    const Real m = ctx.physics().mass, rho0 = ctx.physics().rest_density, self = m * kernel.w(0);
+    const Real delta = Real(ctx.read(res::pcisph_delta).delta);
     const std::size_t n = xs.size();
     const ErrAcc acc = tbb::parallel_deterministic_reduce(
         tbb::blocked_range<std::size_t>(0, n, 1024), ErrAcc{},
@@ -91,10 +93,10 @@ void PcisphDensitySystem::run(World& w) {
             for (std::size_t i = r.begin(); i < r.end(); ++i) {
                 const Vec3 xi = xs[i];
                 Real sum = 0;
-                for (Index j : w.fluid_neighbours.of(Index(i))) sum += kernel.w((xi - xs[j]).norm());
+                for (Index j : fluid_nb.of(Index(i))) sum += kernel.w((xi - xs[j]).norm());
                 Real bsum = 0;
                 if (with_boundary)
-                    for (Index b : w.boundary_neighbours.of(Index(i))) bsum += mb[b] * kernel.w((xi - xb[b]).norm());
+                    for (Index b : boundary_nb->of(Index(i))) bsum += mb[b] * kernel.w((xi - xb[b]).norm());
                 const Real r_i = self + m * sum + bsum;  // eq. 13 (eq. 2 without the boundary)
                 rho[i] = r_i;
                 p[i] = pcisph_pressure_update(p[i], delta, r_i, rho0);  // eq. 3
@@ -109,8 +111,9 @@ void PcisphDensitySystem::run(World& w) {
             a.max = std::max(a.max, b.max);
             return a;
         });
-    w.pcisph.pred_err_max = acc.max;
-    w.pcisph.pred_err_avg = n ? acc.sum / double(n) : 0.0;
+    PcisphErrors& errors = ctx.write(res::pcisph_errors);
+    errors.pred_err_max = acc.max;
+    errors.pred_err_avg = n ? acc.sum / double(n) : 0.0;
 }
 
 // ---- boundary density and pressure ----
@@ -123,9 +126,9 @@ void PcisphDensitySystem::run(World& w) {
 // compression of the fluid above it.
 
 Access PcisphBoundaryDensitySystem::access() const {
-    return {{x_pred, res::boundary_active, res::boundary(comp::position.name), res::boundary(comp::self_density.name),
-             res::pcisph_delta},
-            {res::boundary(comp::density.name), res::boundary(comp::pressure.name)}};
+    return Access()
+        .read(x_pred, res::boundary_active, boundary(comp::position), boundary(comp::self_density), res::pcisph_delta)
+        .write(boundary(comp::density), boundary(comp::pressure));
 }
 
 void PcisphBoundaryDensitySystem::register_components(World& w) {
@@ -133,16 +136,16 @@ void PcisphBoundaryDensitySystem::register_components(World& w) {
     w.boundary.store.add(comp::pressure);
 }
 
-void PcisphBoundaryDensitySystem::run(World& w) {
-    const auto xs = w.fluid.store.get(comp::predicted_position);
-    const auto xb = w.boundary.store.get(comp::position);
-    const auto self = w.boundary.store.get(comp::self_density);
-    auto rho = w.boundary.store.get(comp::density);
-    auto p = w.boundary.store.get(comp::pressure);
-    const BoundaryActive& act = w.boundary_active;
-    const CubicSpline& kernel = w.kernel;
-    const Real m = w.physics.mass, rho0 = w.physics.rest_density;
-    const Real delta = Real(w.pcisph.delta);
+void PcisphBoundaryDensitySystem::run(Context& ctx) {
+    const auto xs = ctx.read(fluid(comp::predicted_position));
+    const auto xb = ctx.read(boundary(comp::position));
+    const auto self = ctx.read(boundary(comp::self_density));
+    auto rho = ctx.write(boundary(comp::density));
+    auto p = ctx.write(boundary(comp::pressure));
+    const BoundaryActive& act = ctx.read(res::boundary_active);
+    const CubicSpline& kernel = ctx.kernel();
+    const Real m = ctx.physics().mass, rho0 = ctx.physics().rest_density;
+    const Real delta = Real(ctx.read(res::pcisph_delta).delta);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, act.set.size(), 512), [&](const auto& r) {
         for (std::size_t k = r.begin(); k < r.end(); ++k) {
             const Index b = act.set[k];
@@ -158,45 +161,45 @@ void PcisphBoundaryDensitySystem::run(World& w) {
 // ---- pressure force ----
 
 Access PcisphPressureForceSystem::access() const {
-    Access a{{res::fluid(comp::position.name), res::fluid(comp::density.name), res::fluid(comp::pressure.name),
-              res::fluid_neighbours},
-             {res::fluid(comp::pressure_acceleration.name)}};
-    if (m_ihmsen)
-        a.reads.insert(a.reads.end(), {res::boundary_neighbours, res::boundary(comp::position.name),
-                                       res::boundary(comp::mass.name), res::boundary(comp::density.name),
-                                       res::boundary(comp::pressure.name)});
-    return a;
+    return Access()
+        .read(fluid(comp::position), fluid(comp::density), fluid(comp::pressure), res::fluid_neighbours)
+        .write(fluid(comp::pressure_acceleration))
+        .read_if(m_ihmsen, res::boundary_neighbours, boundary(comp::position), boundary(comp::mass),
+                 boundary(comp::density), boundary(comp::pressure));
 }
 
-void PcisphPressureForceSystem::run(World& w) {
-    const auto x = w.fluid.store.get(comp::position);
-    const auto rho = w.fluid.store.get(comp::density);
-    const auto p = w.fluid.store.get(comp::pressure);
-    auto ap = w.fluid.store.get(comp::pressure_acceleration);
-    const bool with_boundary = m_ihmsen && w.boundary.size() > 0;
+void PcisphPressureForceSystem::run(Context& ctx) {
+    const auto x = ctx.read(fluid(comp::position));
+    const auto rho = ctx.read(fluid(comp::density));
+    const auto p = ctx.read(fluid(comp::pressure));
+    auto ap = ctx.write(fluid(comp::pressure_acceleration));
+    const bool with_boundary = m_ihmsen && ctx.size(SetId::Boundary) > 0;
     std::span<const Vec3> xb;
     std::span<const Real> mb, rhob, pb;
+    const NeighbourLists& fluid_nb = ctx.read(res::fluid_neighbours);
+    const NeighbourLists* boundary_nb = nullptr;
     if (with_boundary) {
-        xb = w.boundary.store.get(comp::position);
-        mb = w.boundary.store.get(comp::mass);
-        rhob = w.boundary.store.get(comp::density);
-        pb = w.boundary.store.get(comp::pressure);
+        xb = ctx.read(boundary(comp::position));
+        mb = ctx.read(boundary(comp::mass));
+        rhob = ctx.read(boundary(comp::density));
+        pb = ctx.read(boundary(comp::pressure));
+        boundary_nb = &ctx.read(res::boundary_neighbours);
     }
-    const CubicSpline& kernel = w.kernel;
-    const Real m = w.physics.mass;
+    const CubicSpline& kernel = ctx.kernel();
+    const Real m = ctx.physics().mass;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 512), [&](const auto& r) {
         for (std::size_t i = r.begin(); i < r.end(); ++i) {
             const Vec3 xi = x[i];
             const Real pi = p[i] / (rho[i] * rho[i]);
             Vec3 a = Vec3::Zero();
-            for (Index j : w.fluid_neighbours.of(Index(i))) {
+            for (Index j : fluid_nb.of(Index(i))) {
                 const Real pj = p[j] / (rho[j] * rho[j]);
                 if (pi == Real(0) && pj == Real(0)) continue;
                 const Vec3 xij = xi - x[j];
                 a -= (m * (pi + pj)) * kernel.grad(xij, xij.norm());
             }
             if (with_boundary)
-                for (Index b : w.boundary_neighbours.of(Index(i))) {
+                for (Index b : boundary_nb->of(Index(i))) {
                     const Real pbb = pb[b] / (rhob[b] * rhob[b]);
                     if (pi == Real(0) && pbb == Real(0)) continue;
                     const Vec3 xib = xi - xb[b];
@@ -210,23 +213,23 @@ void PcisphPressureForceSystem::run(World& w) {
 // ---- integrate ----
 
 Access PcisphIntegrateSystem::access() const {
-    Access a{{res::fluid(comp::pressure_acceleration.name), res::dt},
-             {res::fluid(comp::velocity.name), res::fluid(comp::position.name), res::fluid(comp::acceleration.name)}};
-    if (m_nonpressure) a.reads.push_back(res::fluid(comp::nonpressure_acceleration.name));
-    return a;
+    return Access()
+        .read(fluid(comp::pressure_acceleration), res::dt)
+        .write(fluid(comp::velocity), fluid(comp::position), fluid(comp::acceleration))
+        .read_if(m_nonpressure, fluid(comp::nonpressure_acceleration));
 }
 
 void PcisphIntegrateSystem::register_components(World& w) { w.fluid.store.add(comp::acceleration); }
 
-void PcisphIntegrateSystem::run(World& w) {
-    auto x = w.fluid.store.get(comp::position);
-    auto v = w.fluid.store.get(comp::velocity);
-    auto acc = w.fluid.store.get(comp::acceleration);
-    const auto ap = w.fluid.store.get(comp::pressure_acceleration);
+void PcisphIntegrateSystem::run(Context& ctx) {
+    auto x = ctx.write(fluid(comp::position));
+    auto v = ctx.write(fluid(comp::velocity));
+    auto acc = ctx.write(fluid(comp::acceleration));
+    const auto ap = ctx.read(fluid(comp::pressure_acceleration));
     const std::span<const Vec3> anp =
-        m_nonpressure ? std::span<const Vec3>(w.fluid.store.get(comp::nonpressure_acceleration)) : std::span<const Vec3>{};
-    const Real dt = Real(w.step.dt);
-    const Vec3 g = w.physics.gravity;
+        m_nonpressure ? ctx.read(fluid(comp::nonpressure_acceleration)) : std::span<const Vec3>{};
+    const Real dt = Real(ctx.read(res::dt).dt);
+    const Vec3 g = ctx.physics().gravity;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 4096), [&](const auto& r) {
         for (std::size_t i = r.begin(); i < r.end(); ++i) {
             Vec3 a = g + ap[i];

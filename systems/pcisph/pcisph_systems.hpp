@@ -6,7 +6,10 @@
 ///   pcisph_iterations { pcisph_predict -> predict_collision -> pcisph_density ||
 ///   pcisph_boundary_density -> pcisph_pressure_force } x k -> pcisph_integrate ->
 ///   world_collision -> boundary_collision (safety net) -> step_stats -> adaptive_dt.
-#include "engine/system.hpp"
+#include <string>
+
+#include "engine/graph/system.hpp"
+#include "systems/timestep/adaptive_controller.hpp"
 
 namespace sph {
 
@@ -21,15 +24,32 @@ struct PcisphConfig {
 
 /// @brief Sets the step (adaptive: the controller's pending step, or the initial rule of sec.
 /// 3.3 at the first step) and recomputes delta (eq. 4-5) whenever dt changed.
+/// @brief What a PCISPH run's summary states about its configuration.
+struct PcisphSummaryInfo {
+    std::string boundary_handling;
+    double eta = 0;
+};
+
 class PcisphStepSizeSystem final : public System {
 public:
-    explicit PcisphStepSizeSystem(bool adaptive) : m_adaptive(adaptive) {}
+    using SummaryInfo = PcisphSummaryInfo;
+    /// @param params the controller's parameters (adaptive: its initial rule of sec. 3.3).
+    /// @param gravity |g|, m/s^2 (the initial rule).
+    PcisphStepSizeSystem(bool adaptive, AdaptiveParams params = {}, double gravity = 0, SummaryInfo summary = {})
+        : m_adaptive(adaptive), m_params(params), m_gravity(gravity), m_summary(std::move(summary)) {}
     std::string name() const override { return "pcisph_dt"; }
     Access access() const override;
-    void run(World& w) override;
+    void register_components(World& w) override;
+    void run(Context& ctx) override;
+    /// @brief summary.json "pcisph": average passes, active boundary share, the tracked maxima
+    /// and the step of eq. 14-15 they imply.
+    void summarise(const World& w, const RunTotals& totals, nlohmann::json& summary) const override;
 
 private:
     bool m_adaptive;
+    AdaptiveParams m_params;
+    double m_gravity;
+    SummaryInfo m_summary;
     double m_prototype_sum = 0;
 };
 
@@ -40,7 +60,7 @@ public:
     std::string name() const override { return "pcisph_reset"; }
     Access access() const override;
     void register_components(World& w) override;
-    void run(World& w) override;
+    void run(Context& ctx) override;
 
 private:
     bool m_ihmsen;
@@ -53,7 +73,7 @@ public:
     std::string name() const override { return "pcisph_predict"; }
     Access access() const override;
     void register_components(World& w) override;
-    void run(World& w) override;
+    void run(Context& ctx) override;
 
 private:
     bool m_nonpressure;
@@ -67,8 +87,9 @@ public:
     explicit PcisphDensitySystem(bool ihmsen) : m_ihmsen(ihmsen) {}
     std::string name() const override { return "pcisph_density"; }
     Access access() const override;
+    /// @brief Registers density, pressure and the pass's error statistics (res::pcisph_errors).
     void register_components(World& w) override;
-    void run(World& w) override;
+    void run(Context& ctx) override;
 
 private:
     bool m_ihmsen;
@@ -80,7 +101,7 @@ public:
     std::string name() const override { return "pcisph_boundary_density"; }
     Access access() const override;
     void register_components(World& w) override;
-    void run(World& w) override;
+    void run(Context& ctx) override;
 };
 
 /// @brief Eq. 6 per unit mass, fluid and (Ihmsen) boundary neighbours.
@@ -89,7 +110,7 @@ public:
     explicit PcisphPressureForceSystem(bool ihmsen) : m_ihmsen(ihmsen) {}
     std::string name() const override { return "pcisph_pressure_force"; }
     Access access() const override;
-    void run(World& w) override;
+    void run(Context& ctx) override;
 
 private:
     bool m_ihmsen;
@@ -103,7 +124,7 @@ public:
     std::string name() const override { return "pcisph_integrate"; }
     Access access() const override;
     void register_components(World& w) override;
-    void run(World& w) override;
+    void run(Context& ctx) override;
 
 private:
     bool m_nonpressure;

@@ -9,14 +9,16 @@
 #include <atomic>
 #include <limits>
 
-#include "engine/components.hpp"
-#include "engine/world.hpp"
+#include "engine/data/components.hpp"
+#include "engine/data/world.hpp"
+#include "engine/graph/context.hpp"
 
 namespace sph {
 
 Access DtPropagationSystem::access() const {
-    return {{res::active_set, res::halo_set, res::fluid_neighbours, res::fluid(comp::dt_raw.name)},
-            {res::fluid(comp::dt.name)}};
+    return Access()
+        .read(res::active_set, res::halo_set, res::fluid_neighbours, fluid(comp::dt_raw))
+        .write(fluid(comp::dt), counter::propagation_updates);
 }
 
 void DtPropagationSystem::register_components(World& w) {
@@ -24,18 +26,19 @@ void DtPropagationSystem::register_components(World& w) {
     w.fluid.store.add(comp::dt_raw);
 }
 
-void DtPropagationSystem::run(World& w) {
-    const auto dt_raw = w.fluid.store.get(comp::dt_raw);
-    auto dt = w.fluid.store.get(comp::dt);
-    const auto& active = w.active_set;
-    const auto& halo = w.halo_set;
+void DtPropagationSystem::run(Context& ctx) {
+    const auto dt_raw = ctx.read(fluid(comp::dt_raw));
+    auto dt = ctx.write(fluid(comp::dt));
+    const auto& active = ctx.read(res::active_set);
+    const auto& halo = ctx.read(res::halo_set);
+    const NeighbourLists& lists = ctx.read(res::fluid_neighbours);
     const std::size_t na = active.size(), n = na + halo.size();
     // Gather over each particle's own list (line 16 as written).
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 512), [&](const auto& r) {
         for (std::size_t k = r.begin(); k < r.end(); ++k) {
             const Index i = k < na ? active[k] : halo[k - na];
             double m = dt_raw[i];
-            for (Index j : w.fluid_neighbours.of(i)) m = std::min(m, dt_raw[j]);
+            for (Index j : lists.of(i)) m = std::min(m, dt_raw[j]);
             dt[i] = m;
         }
     });
@@ -44,7 +47,7 @@ void DtPropagationSystem::run(World& w) {
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, na, 256), [&](const auto& r) {
         for (std::size_t k = r.begin(); k < r.end(); ++k) {
             const double mine = dt_raw[active[k]];
-            for (Index j : w.fluid_neighbours.of(active[k])) {
+            for (Index j : lists.of(active[k])) {
                 std::atomic_ref<double> target(dt[j]);
                 double cur = target.load(std::memory_order_relaxed);
                 while (mine < cur && !target.compare_exchange_weak(cur, mine, std::memory_order_relaxed)) {
@@ -52,11 +55,11 @@ void DtPropagationSystem::run(World& w) {
             }
         }
     });
-    w.step.propagation_updates = n;
+    ctx.write(counter::propagation_updates) = n;
 }
 
 Access IndividualGlobalDtSystem::access() const {
-    return {{res::fluid(comp::dt.name), res::fluid(comp::t_last.name), res::fluid(comp::active.name)}, {res::dt}};
+    return Access().read(fluid(comp::dt), fluid(comp::t_last), fluid(comp::active)).write(res::dt);
 }
 
 void IndividualGlobalDtSystem::register_components(World& w) {
@@ -65,18 +68,18 @@ void IndividualGlobalDtSystem::register_components(World& w) {
     w.fluid.store.add(comp::active);
 }
 
-void IndividualGlobalDtSystem::run(World& w) {
-    const auto dt = w.fluid.store.get(comp::dt);
-    const auto t_last = w.fluid.store.get(comp::t_last);
-    const auto active = w.fluid.store.get(comp::active);
-    StepState& s = w.step;
-    const Tick now = s.t_ticks;
-    const bool deadline = w.scene.simulation.stepping.activation == Activation::Deadline;
+void IndividualGlobalDtSystem::run(Context& ctx) {
+    const auto dt = ctx.read(fluid(comp::dt));
+    const auto t_last = ctx.read(fluid(comp::t_last));
+    const auto active = ctx.read(fluid(comp::active));
+    StepSize& s = ctx.write(res::dt);
+    const Tick now = ctx.clock().t_ticks;
+    const bool deadline = m_activation == Activation::Deadline;
     struct Min {
         double dt;  // line 17: min_i Delta t_i
         Tick next;  // the earliest deadline of an inactive particle that is still ahead
     };
-    const Min none{w.scene.simulation.stepping.dt_max, std::numeric_limits<Tick>::max()};
+    const Min none{m_dt_max, std::numeric_limits<Tick>::max()};
     const Min m = tbb::parallel_reduce(
         tbb::blocked_range<std::size_t>(0, dt.size(), 8192), none,
         [&](const auto& r, Min best) {
@@ -99,7 +102,7 @@ void IndividualGlobalDtSystem::run(World& w) {
     if (deadline && m.next != std::numeric_limits<Tick>::max())
         cap = std::max(m.next - now, std::max<Tick>(1, to_ticks(s.dt_stable)));
     s.dt_stable = m.dt;
-    s.set_dt_clipped(m.dt, cap);
+    s.set_clipped(m.dt, cap, ctx.clock());
 }
 
 }  // namespace sph

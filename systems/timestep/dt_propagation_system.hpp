@@ -2,7 +2,8 @@
 /// @file dt_propagation_system.hpp
 /// @brief Individual time stepping, He et al. Alg. 2 line 16 (Delta t_i = min over the
 /// neighbours j of Delta t_j^raw, i itself included) and line 17 (Delta t_sim = min_i Delta t_i).
-#include "engine/system.hpp"
+#include "engine/data/scene.hpp"
+#include "engine/graph/system.hpp"
 
 namespace sph {
 
@@ -16,7 +17,7 @@ public:
     std::string name() const override { return "dt_propagation"; }
     Access access() const override;
     void register_components(World& w) override;
-    void run(World& w) override;
+    void run(Context& ctx) override;
 };
 
 /// @brief He Alg. 2 line 17: Delta t_sim = min_i Delta t_i over all fluid particles (a
@@ -27,10 +28,15 @@ public:
 /// a held acceleration, and steps do not fragment (select_active_system.hpp).
 class IndividualGlobalDtSystem final : public System {
 public:
-    std::string name() const override { return "global_dt"; }
+    IndividualGlobalDtSystem(Activation activation, double dt_max) : m_activation(activation), m_dt_max(dt_max) {}
+    std::string name() const override { return "individual_dt"; }
     Access access() const override;
     void register_components(World& w) override;
-    void run(World& w) override;
+    void run(Context& ctx) override;
+
+private:
+    Activation m_activation;
+    double m_dt_max;
 };
 
 }  // namespace sph

@@ -5,7 +5,8 @@
 #include <cmath>
 #include <limits>
 
-#include "engine/world.hpp"
+#include "engine/data/world.hpp"
+#include "engine/graph/context.hpp"
 
 namespace sph {
 
@@ -17,13 +18,22 @@ double global_time_step(const SteppingParams& p, double h, double c_s, double v_
     return dt;  // eq. 8
 }
 
-Access GlobalDtSystem::access() const { return {{res::stats}, {res::dt}}; }
+Access GlobalDtSystem::access() const { return Access().read(res::stats).write(res::dt); }
 
-void GlobalDtSystem::run(World& w) {
-    StepState& s = w.step;
-    s.dt_stable = global_time_step(w.scene.simulation.stepping, w.physics.h, w.physics.speed_of_sound, s.v_max, s.a_max);
+void GlobalDtSystem::run(Context& ctx) {
+    const StepStats& st = ctx.read(res::stats);
+    StepSize& s = ctx.write(res::dt);
+    s.dt_stable = global_time_step(m_stepping, ctx.physics().h, ctx.physics().speed_of_sound, st.v_max, st.a_max);
     // The last step is shortened so that the run ends exactly at its end time.
-    s.set_dt_clipped(s.dt_stable);
+    s.set_clipped(s.dt_stable, ctx.clock());
+}
+
+Access ConstantDtSystem::access() const { return Access().write(res::dt); }
+
+void ConstantDtSystem::run(Context& ctx) {
+    StepSize& s = ctx.write(res::dt);
+    s.dt_stable = m_dt;
+    s.set_clipped(m_dt, ctx.clock());
 }
 
 }  // namespace sph

@@ -3,21 +3,37 @@
 /// @brief Globally adaptive step, He et al. eq. 6-8:
 /// dt = min(lambda_v h / v_max, lambda_f sqrt(h / a_max)), optionally also the acoustic
 /// condition dt <= lambda_c h / (c_s + v_max), and never above dt_max.
-#include "engine/system.hpp"
-#include "engine/types.hpp"
+#include "engine/core/types.hpp"
+#include "engine/data/scene.hpp"
+#include "engine/graph/system.hpp"
 
 namespace sph {
-
-struct SteppingParams;
 
 /// @brief The step of He eq. 6-8 (+ acoustic) for given maxima; infinity-safe for v = a = 0.
 double global_time_step(const SteppingParams& p, double h, double c_s, double v_max, double a_max);
 
 class GlobalDtSystem final : public System {
 public:
+    explicit GlobalDtSystem(const SteppingParams& stepping) : m_stepping(stepping) {}
     std::string name() const override { return "global_dt"; }
     Access access() const override;
-    void run(World& w) override;
+    void run(Context& ctx) override;
+
+private:
+    SteppingParams m_stepping;
+};
+
+/// @brief He et al. Alg. 1 with a fixed step (`constant`): the scene's dt every step, the last
+/// one clipped so that the run ends exactly at its end time.
+class ConstantDtSystem final : public System {
+public:
+    explicit ConstantDtSystem(double dt) : m_dt(dt) {}
+    std::string name() const override { return "constant_dt"; }
+    Access access() const override;
+    void run(Context& ctx) override;
+
+private:
+    double m_dt;
 };
 
 }  // namespace sph

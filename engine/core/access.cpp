@@ -1,0 +1,20 @@
+#include "engine/core/access.hpp"
+
+namespace sph {
+
+Access& Access::merge(const Access& other) {
+    for (const auto& k : other.m_reads) add(m_reads, k);
+    for (const auto& k : other.m_writes) add(m_writes, k);
+    for (SetId s : other.m_resizes) resizes(s);
+    return *this;
+}
+
+std::vector<std::string> Access::counters() const {
+    constexpr std::string_view prefix = "counter.";
+    std::vector<std::string> out;
+    for (const auto& k : m_writes)
+        if (k.rfind(prefix, 0) == 0) out.push_back(k.substr(prefix.size()));
+    return out;
+}
+
+}  // namespace sph

@@ -1,0 +1,128 @@
+#pragma once
+/// @file grid.hpp
+/// @brief Uniform grid with cell size equal to the support radius, built in parallel, and
+/// fixed-capacity neighbour lists that can be rebuilt for any subset of particles.
+#include <algorithm>
+#include <cstdint>
+#include <span>
+
+#include <tbb/parallel_for.h>
+#include <vector>
+
+#include "engine/core/types.hpp"
+
+namespace sph {
+
+/// @brief Dense uniform grid over a box. Cells are numbered x-fastest, so the three cells of
+/// one x-row are contiguous in the sorted order and a 27-cell query is 9 contiguous ranges.
+class UniformGrid {
+public:
+    UniformGrid() = default;
+    /// @brief Grid covering `box` grown by one cell on every side; positions outside are
+    /// clamped into the border cells (the run stops on such particles anyway).
+    UniformGrid(const Aabb& box, Real cell_size);
+
+    /// @brief Sorts particle indices by cell (deterministically: ties by index) and gathers
+    /// their positions in that order. Parallel; O(N log N) with a nearly sorted input.
+    void build(std::span<const Vec3> positions);
+
+    Eigen::Vector3i cell_coords(const Vec3& x) const {
+        Eigen::Vector3i c;
+        for (int a = 0; a < 3; ++a) {
+            const int v = static_cast<int>(std::floor((x[a] - m_origin[a]) * m_inv_cell));
+            c[a] = std::clamp(v, 0, m_dims[a] - 1);
+        }
+        return c;
+    }
+    std::int64_t cell_index(const Eigen::Vector3i& c) const {
+        return c[0] + std::int64_t(m_dims[0]) * (c[1] + std::int64_t(m_dims[1]) * c[2]);
+    }
+
+    /// @brief Calls fn(j, x_j) for every particle j in the 27 cells around x (a superset of
+    /// the particles within one cell size of x).
+    template <class Fn>
+    void for_each_candidate(const Vec3& x, Fn&& fn) const {
+        const Eigen::Vector3i c = cell_coords(x);
+        const int x0 = std::max(c[0] - 1, 0), x1 = std::min(c[0] + 1, m_dims[0] - 1);
+        for (int z = std::max(c[2] - 1, 0); z <= std::min(c[2] + 1, m_dims[2] - 1); ++z)
+            for (int y = std::max(c[1] - 1, 0); y <= std::min(c[1] + 1, m_dims[1] - 1); ++y) {
+                const std::int64_t row = cell_index({0, y, z});
+                const Index b = m_cell_start[row + x0], e = m_cell_start[row + x1 + 1];
+                for (Index k = b; k < e; ++k) fn(m_sorted_index[k], m_sorted_pos[k]);
+            }
+    }
+
+    const Eigen::Vector3i& dims() const { return m_dims; }
+    Real cell_size() const { return m_cell; }
+    std::size_t cell_count() const { return m_cell_start.empty() ? 0 : m_cell_start.size() - 1; }
+    std::size_t particle_count() const { return m_sorted_index.size(); }
+    std::size_t bytes() const;
+
+private:
+    Vec3 m_origin = Vec3::Zero();
+    Real m_cell = 1, m_inv_cell = 1;
+    Eigen::Vector3i m_dims{1, 1, 1};
+    std::vector<std::uint64_t> m_keys;    ///< (cell << 32) | index, sorted
+    std::vector<Index> m_cell_start;      ///< first sorted slot of each cell; size cells + 1
+    std::vector<Index> m_sorted_index;
+    std::vector<Vec3> m_sorted_pos;
+};
+
+/// @brief Neighbour lists with a fixed capacity per query particle, so the lists of any
+/// subset can be rebuilt in place while the others keep theirs (individual stepping).
+/// Capacity grows (and every list is rebuilt) when a particle has more neighbours.
+struct NeighbourLists {
+    Index capacity = 0;
+    std::vector<Index> count;    ///< per query particle
+    std::vector<Index> indices;  ///< count.size() * capacity
+
+    std::span<const Index> of(Index i) const {
+        return {indices.data() + std::size_t(i) * capacity, count[i]};
+    }
+    std::size_t bytes() const {
+        return count.capacity() * sizeof(Index) + indices.capacity() * sizeof(Index);
+    }
+    std::size_t total() const;
+    /// @brief Follows a permutation of the query particles (new[i] = old[perm[i]]); when
+    /// `remap_entries`, the entries refer to the same particle set and are renumbered too.
+    /// Keeps the lists of particles that are not rebuilt this step valid after a sort.
+    void permute(std::span<const Index> perm, bool remap_entries);
+};
+
+/// @brief Indices i in [0, n) with pred(i), ascending; parallel and deterministic.
+template <class Pred>
+std::vector<Index> collect_indices(std::size_t n, Pred&& pred);
+
+/// @brief Which particles to (re)build lists for: all of them, or an explicit subset.
+struct QuerySubset {
+    std::span<const Index> indices;  ///< empty with all == true means every particle
+    bool all = true;
+};
+
+/// @brief Builds the lists of the query particles against the particles of `grid`: every j
+/// with |x_i - x_j|^2 < radius^2, in the grid's sorted order, excluding j == i when
+/// `exclude_self` (query and grid are the same set). Equals brute force exactly.
+void build_neighbour_lists(const UniformGrid& grid, std::span<const Vec3> query_positions,
+                           Real radius, bool exclude_self, const QuerySubset& subset,
+                           NeighbourLists& lists);
+
+/// @brief Permutation that orders particles along the z-order (Morton) curve of their grid
+/// cells, ties broken by current index: new[i] = old[perm[i]].
+std::vector<Index> zorder_permutation(const UniformGrid& grid, std::span<const Vec3> positions);
+
+template <class Pred>
+std::vector<Index> collect_indices(std::size_t n, Pred&& pred) {
+    constexpr std::size_t kBlock = 4096;
+    const std::size_t blocks = (n + kBlock - 1) / kBlock;
+    std::vector<std::vector<Index>> parts(blocks);
+    tbb::parallel_for(std::size_t(0), blocks, [&](std::size_t b) {
+        const std::size_t end = std::min(n, (b + 1) * kBlock);
+        for (std::size_t i = b * kBlock; i < end; ++i)
+            if (pred(i)) parts[b].push_back(Index(i));
+    });
+    std::vector<Index> out;
+    for (const auto& p : parts) out.insert(out.end(), p.begin(), p.end());
+    return out;
+}
+
+}  // namespace sph

@@ -1,0 +1,32 @@
+#pragma once
+/// @file types.hpp
+/// @brief Scalar and vector types shared by the whole engine.
+#include <Eigen/Core>
+#include <cstdint>
+
+namespace sph {
+
+#ifdef SPH_DOUBLE
+using Real = double;
+#else
+/// @brief Particle field precision: float by default, double with SPH_DOUBLE=ON.
+using Real = float;
+#endif
+
+using Vec3 = Eigen::Matrix<Real, 3, 1>;
+/// @brief Double-precision 3-vector for scene geometry and reductions.
+using Vec3d = Eigen::Matrix<double, 3, 1>;
+using Mat3 = Eigen::Matrix<Real, 3, 3>;
+using Index = std::uint32_t;
+
+/// @brief Axis-aligned box in metres.
+struct Aabb {
+    Vec3d min{0, 0, 0};
+    Vec3d max{0, 0, 0};
+    Vec3d extent() const { return max - min; }
+    bool contains(const Vec3d& p) const {
+        return (p.array() >= min.array()).all() && (p.array() <= max.array()).all();
+    }
+};
+
+}  // namespace sph

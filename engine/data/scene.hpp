@@ -1,0 +1,250 @@
+#pragma once
+/// @file scene.hpp
+/// @brief A validated scene: what to simulate, how, and what to write. Loaded from strict JSON
+/// (see scenes/README.md for the format, with units) or built in code.
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <limits>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "engine/data/motion.hpp"
+#include "engine/data/probe_desc.hpp"
+#include "engine/core/types.hpp"
+
+namespace sph {
+
+enum class Method { Wcsph, Pcisph };
+/// `constant` for both methods; `global` and `individual` are WCSPH modes; `adaptive` is the
+/// PCISPH mode of Ihmsen et al. 2010 (eq. 16-27).
+enum class SteppingMode { Constant, Global, Individual, Adaptive };
+/// PCISPH iteration rule: `fixed` runs exactly `iterations` (Ihmsen 2010: three);
+/// `until_converged` is Solenthaler & Pajarola's loop: while max rho_err > eta or k < iterations,
+/// at most `max_iterations`.
+enum class PcisphLoop { Fixed, UntilConverged };
+/// Ihmsen 2010 sec. 3.2 (boundary density and pressure, eq. 13, plus direct forcing eq. 9-12),
+/// or `direct_forcing` alone (Becker, Teschner, Teschner 2009 eq. 7-8: no boundary density).
+enum class BoundaryHandling { Ihmsen, DirectForcing };
+/// WCSPH pressure force: `symmetric` is He et al. eq. 4; `corrected` multiplies each pair's
+/// kernel gradient by the symmetrised correction (L_i + L_j) / 2 of Bonet & Lok 1999, which
+/// makes the force first-order consistent while keeping it antisymmetric (momentum conserved)
+/// and repulsive (systems/forces/gradient_correction_system.hpp).
+enum class PressureGradient { Symmetric, Corrected };
+/// When `individual` evaluates a particle whose deadline t_last + Delta t_i is near (the rule
+/// behind He et al. Alg. 2 line 2). `deadline`: at the last step that starts before the
+/// deadline, and no step is longer than the earliest deadline it would carry an inactive
+/// particle past; so no particle holds its force for longer than its Delta t_i. `paper`: at the
+/// first step that starts at or after the deadline (He: t_last + Delta t_i < t_sim, tie counted
+/// as active); a particle then holds its force for up to Delta t_i + Delta t_sim, almost twice
+/// its step when the two are close. systems/active/select_active_system.hpp.
+enum class Activation { Deadline, Paper };
+
+/// @brief Names as written in scene files and on the command line.
+const char* to_string(Method m);
+const char* to_string(SteppingMode m);
+const char* to_string(PcisphLoop l);
+const char* to_string(BoundaryHandling b);
+const char* to_string(PressureGradient g);
+const char* to_string(Activation a);
+/// @brief Every method and every stepping mode the loader knows, by name (sph-run --list-modes;
+/// the study tool runs each pair a scene accepts, so a new mode joins it with no new code).
+std::vector<std::string> method_names();
+std::vector<std::string> stepping_mode_names();
+
+/// @brief Time-step control (He et al. eq. 6-8 for `global`; eq. 9 and Alg. 2 for
+/// `individual`, whose defaults are lambda_v 0.05, lambda_f 0.025 and no acoustic condition).
+struct SteppingParams {
+    SteppingMode mode = SteppingMode::Global;
+    double dt = 4e-4;          ///< s; the step of `constant`, and the first step of `global`.
+    double lambda_v = 0.1;     ///< He eq. 6 CFL coefficient.
+    double lambda_f = 0.05;    ///< He eq. 7 force coefficient.
+    bool acoustic = true;      ///< Also apply dt <= lambda_c h / (c_s + v_max).
+    double lambda_c = 0.4;     ///< Acoustic (sound-speed CFL) coefficient.
+    double dt_max = 5e-3;      ///< s; upper bound on any step.
+    double dt_min = 1e-7;      ///< s; a step below this stops the run with a diagnosis.
+    Activation activation = Activation::Deadline;  ///< `individual` only (see Activation).
+};
+
+/// @brief PCISPH (Solenthaler & Pajarola 2009; Ihmsen et al. 2010 Alg. 2) and its adaptive step.
+/// Densities are relative: eta = 0.01 is a 1 % density error (the paper's eta_avg%).
+struct PcisphParams {
+    int iterations = 3;          ///< fixed: iterations per step; until_converged: the minimum
+    int max_iterations = 50;     ///< until_converged: upper bound
+    PcisphLoop loop = PcisphLoop::Fixed;
+    double eta = 0.01;           ///< eta_avg: target average compression (fraction of rho0)
+    std::optional<double> eta_max;       ///< default 10 eta (Ihmsen sec. 3.3)
+    std::optional<double> delta_shock;   ///< eq. 25 threshold; default 4 eta, within (eta, eta_max)
+};
+
+/// @brief Boundary handling of PCISPH (`boundary` section of a scene).
+struct BoundaryParams {
+    BoundaryHandling handling = BoundaryHandling::Ihmsen;
+    double friction = 1.0;  ///< epsilon of Ihmsen eq. 12: 1 keeps the tangential velocity (free slip)
+};
+
+struct SimulationParams {
+    Method method = Method::Wcsph;
+    SteppingParams stepping;
+    double end_time = 1.0;       ///< s, simulated.
+    double frame_rate = 30.0;    ///< frames per simulated second; 0 writes no frames.
+    double scale = 1.0;          ///< particle-count multiplier: radius /= cbrt(scale).
+    Vec3d gravity{0.0, -9.81, 0.0};  ///< m/s^2
+    int sort_interval = 16;      ///< steps between z-order re-sorts of the particle columns.
+};
+
+struct FluidParams {
+    double rest_density = 1000.0;     ///< kg/m^3
+    double particle_radius = 0.01;    ///< m, before `scale`; spacing is 2 r, support h = support * 2 r.
+    /// Kernel support radius h in particle spacings (default 2: h = 4 r, as He et al.). A larger
+    /// support lowers the kernel-sum error at a cost of about support^3 neighbours per particle.
+    double support = 2.0;
+    double viscosity = 0.1;           ///< Monaghan artificial viscosity alpha (dimensionless).
+    std::optional<double> speed_of_sound;  ///< m/s; default from density_fluctuation.
+    double density_fluctuation = 0.01;     ///< target |rho/rho0 - 1| for the default c_s.
+    /// Becker & Teschner 2007 eq. 13 cohesion coefficient kappa (m^3/s^2):
+    /// a_i = -kappa sum_j (m_j/m_i) x_ij W_ij. 0: no surface-tension system (PCISPH only).
+    double surface_tension = 0.0;
+    /// Monaghan alpha between fluid and boundary particles (default: `viscosity`); 0 makes every
+    /// wall free-slip (it then exerts only its Akinci pressure force, normal to it).
+    std::optional<double> boundary_viscosity;
+    /// WCSPH only: `corrected` for hydrostatic accuracy (README, Validation), at the cost of one
+    /// more pass over the neighbours per step.
+    PressureGradient pressure_gradient = PressureGradient::Symmetric;
+};
+
+/// @brief A block of fluid particles on a cubic lattice of spacing 2 r, filling [min, max].
+struct FluidBlock {
+    Aabb box;
+    Vec3d velocity{0, 0, 0};  ///< m/s, initial.
+    /// Start at hydrostatic equilibrium: the lattice is compressed along gravity so that the
+    /// summation density at depth d is the Tait density of pressure rho0 g d. Otherwise the
+    /// column starts at rho0 everywhere and rings acoustically (period 4 H / c_s).
+    bool hydrostatic = true;
+};
+
+enum class BoundaryShape { Container, Box, Sphere, Cylinder, Heightfield, Mesh };
+const char* to_string(BoundaryShape s);
+
+/// @brief A rigid boundary sampled with particles (Akinci et al. 2012).
+/// `container`: the inside of a box holds the fluid (its six walls are sampled);
+/// `box`: a solid obstacle; `sphere`: a solid ball. Static unless it has a `motion`, a
+/// prescribed translation (engine/motion.hpp): the declared geometry is its position at
+/// displacement zero, and at time t every point of it is moved by displacement(motion, t).
+struct BoundaryDesc {
+    BoundaryShape shape = BoundaryShape::Container;
+    Aabb box;                 ///< container, box
+    Vec3d center{0, 0, 0};    ///< sphere; cylinder: centre of its base
+    double radius = 0.0;      ///< sphere, cylinder, m
+    Vec3d axis{0, 1, 0};      ///< cylinder: unit axis from the base
+    double height = 0.0;      ///< cylinder, m
+    /// heightfield and mesh: the surface as triangles, the front (counter-clockwise) side
+    /// facing the fluid; `box` is their bounding box. Heightfield: heights[k][i] is the surface
+    /// height y at x = min.x + i (max.x - min.x)/(columns - 1), z likewise along rows k.
+    std::vector<Vec3d> vertices;
+    std::vector<std::array<int, 3>> triangles;
+    std::vector<std::vector<double>> heights;  ///< heightfield
+    std::filesystem::path file;                ///< mesh: the OBJ file (resolved)
+    std::optional<Motion> motion;  ///< none: static
+};
+
+/// @brief Reads the triangles of a Wavefront OBJ file (`v` and `f` lines; polygons are fanned
+/// into triangles; `vt`/`vn` references and other statements are ignored). Throws InputError
+/// naming the file (as `name`, when given) and line of a malformed statement.
+void read_obj(const std::filesystem::path& file, std::vector<Vec3d>& vertices, std::vector<std::array<int, 3>>& triangles,
+              const std::string& name = {});
+
+/// @brief The point a circle motion carries round its circle: the centre of the box or sphere.
+Vec3d reference_point(const BoundaryDesc& b);
+/// @brief The same boundary moved by `d` metres (its motion is kept).
+BoundaryDesc translated(const BoundaryDesc& b, const Vec3d& d);
+
+/// @brief A disc that emits fluid particles (method "pcisph"): candidates on a square lattice of
+/// spacing 2 r over the disc through `position`, normal to `velocity`. A candidate is inserted
+/// only when no fluid particle and no boundary particle is closer than 0.95 x 2 r, and only
+/// while the emitter's budget (rate x elapsed time) allows: a particle is never placed inside
+/// another or inside a boundary.
+struct EmitterDesc {
+    Vec3d position{0, 0, 0};  ///< m, centre of the disc
+    Vec3d velocity{0, -1, 0}; ///< m/s, of the emitted particles; its direction is the disc's normal
+    double radius = 0.05;     ///< m
+    double rate = 1000;       ///< particles per second, at most
+    double start = 0;         ///< s
+    double end = std::numeric_limits<double>::infinity();  ///< s
+    std::uint64_t max_particles = std::numeric_limits<std::uint64_t>::max();  ///< this emitter's total
+};
+
+/// @brief The candidate positions of an emitter, in the order they are tried: a square lattice of
+/// the given spacing (2 r) over its disc, normal to its velocity (at most 2001 per row).
+std::vector<Vec3d> emitter_disc(const EmitterDesc& e, double spacing);
+
+/// @brief Particle frame formats: VTK .vtu (ParaView), Houdini classic .bgeo (partio),
+/// binary .ply (Blender).
+enum class FrameFormat { Vtu, Bgeo, Ply };
+const char* to_string(FrameFormat f);
+
+struct OutputParams {
+    std::vector<FrameFormat> formats{FrameFormat::Vtu};
+    /// Particle attributes written per frame, besides position and id (always written): any
+    /// of "position", "velocity", "density", "pressure", "acceleration", "dt", "active".
+    std::vector<std::string> attributes{"velocity", "density", "pressure"};
+    /// False: the default list above, to which individual stepping adds dt and active.
+    bool attributes_explicit = false;
+};
+
+/// @brief Particles per axis when a box is filled on a cubic lattice of the given spacing:
+/// particle k sits at min + spacing/2 + k*spacing and n = floor(extent/spacing + 1e-6).
+inline Eigen::Vector3i lattice_dims(const Aabb& box, double spacing) {
+    Eigen::Vector3i n;
+    for (int a = 0; a < 3; ++a) {
+        const double cells = (box.max[a] - box.min[a]) / spacing + 1e-6;
+        n[a] = cells > 0 ? static_cast<int>(cells) : 0;
+    }
+    return n;
+}
+
+/// @brief A complete, validated scene.
+struct Scene {
+    std::string name = "scene";
+    std::filesystem::path source;  ///< file it was loaded from (empty if built in code)
+    SimulationParams simulation;
+    /// Particles leaving this box stop the run (exit 3). Defaults to the bounding box of the
+    /// boundaries grown by one support radius.
+    std::optional<Aabb> domain;
+    FluidParams fluid;
+    std::vector<FluidBlock> fluid_blocks;
+    std::vector<BoundaryDesc> boundaries;
+    std::vector<EmitterDesc> emitters;
+    OutputParams output;
+    PcisphParams pcisph;      ///< method "pcisph" only
+    BoundaryParams boundary;  ///< method "pcisph" only
+    std::vector<ProbeDesc> probes;  ///< measurements written as CSV series (engine/probes.hpp)
+
+    /// @brief Particle radius after `scale`.
+    double particle_radius() const;
+};
+
+/// @brief True when any boundary of the scene has a motion.
+bool has_moving_boundaries(const Scene& scene);
+
+/// @brief Loads and validates a scene file. Throws SceneError (a typed InputError) naming the
+/// file, the JSON path, the value found and what was expected.
+/// @param overrides JSON-pointer paths and values applied before validation (command line).
+Scene load_scene(const std::filesystem::path& file,
+                 const std::vector<std::pair<std::string, nlohmann::json>>& overrides = {});
+
+/// @brief The text of a scene file; throws InputError ("cannot open scene file (reason)").
+std::string read_scene_file(const std::filesystem::path& file);
+
+/// @brief Parses and validates scene JSON text; `file` names it in error messages.
+Scene parse_scene(const std::string& text, const std::string& file,
+                  const std::vector<std::pair<std::string, nlohmann::json>>& overrides = {});
+
+/// @brief Parses a command-line `--set path=value`: path in dotted form
+/// (`simulation.stepping.lambda_v`), value as JSON (a bare word is taken as a string).
+std::pair<std::string, nlohmann::json> parse_override(const std::string& assignment);
+
+}  // namespace sph

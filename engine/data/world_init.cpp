@@ -1,0 +1,298 @@
+// Sampling a scene into a World (initialise_world), as named steps in the order they run.
+#include "engine/data/world_init.hpp"
+
+#include <cmath>
+#include <limits>
+#include <tuple>
+
+#include "engine/data/components.hpp"
+#include "engine/data/sampling.hpp"
+
+namespace sph {
+
+namespace {
+
+// m = rho0 / sum_j W(x_i - x_j) over an infinite cubic lattice of spacing s (self included),
+// so that a particle inside a filled lattice has exactly the rest density (He eq. 1).
+Real lattice_mass(const CubicSpline& kernel, Real spacing, Real rest_density) {
+    const int reach = static_cast<int>(std::ceil(kernel.support() / spacing)) + 1;
+    double sum = 0;
+    for (int k = -reach; k <= reach; ++k)
+        for (int j = -reach; j <= reach; ++j)
+            for (int i = -reach; i <= reach; ++i)
+                sum += kernel.w(Real(spacing * std::sqrt(double(i * i + j * j + k * k))));
+    return Real(rest_density / sum);
+}
+
+Aabb default_domain(const Scene& scene, double h) {
+    Aabb box{Vec3d::Constant(std::numeric_limits<double>::max()), Vec3d::Constant(std::numeric_limits<double>::lowest())};
+    auto grow = [&](const Vec3d& p) {
+        box.min = box.min.cwiseMin(p);
+        box.max = box.max.cwiseMax(p);
+    };
+    for (const auto& b : scene.boundaries) {
+        // A moving boundary covers its geometry swept by its displacement up to the end time.
+        Vec3d lo = Vec3d::Zero(), hi = Vec3d::Zero();
+        if (b.motion) std::tie(lo, hi) = displacement_bounds(*b.motion, scene.simulation.end_time);
+        if (b.shape == BoundaryShape::Sphere) {
+            grow(b.center - Vec3d::Constant(b.radius) + lo);
+            grow(b.center + Vec3d::Constant(b.radius) + hi);
+        } else {
+            grow(b.box.min + lo);
+            grow(b.box.max + hi);
+        }
+    }
+    for (const auto& f : scene.fluid_blocks) {
+        grow(f.box.min);
+        grow(f.box.max);
+    }
+    for (const auto& e : scene.emitters) {
+        grow(e.position - Vec3d::Constant(e.radius));
+        grow(e.position + Vec3d::Constant(e.radius));
+    }
+    if (box.min[0] > box.max[0]) box = Aabb{Vec3d::Zero(), Vec3d::Constant(1.0)};
+    box.min -= Vec3d::Constant(h);
+    box.max += Vec3d::Constant(h);
+    return box;
+}
+
+/// The fluid lattice of every block, in double precision (written to the store once c_s is known).
+struct FluidSample {
+    std::vector<Vec3d> x, v;
+    std::vector<std::size_t> block_of;
+};
+
+/// Constants that follow from the scene alone: spacing, support, kernel, lattice mass, domain.
+void derive_constants(World& w, const Scene& scene) {
+    w.scene = scene;
+    Physics& ph = w.physics;
+    const double r = scene.particle_radius();
+    ph.particle_radius = Real(r);
+    ph.spacing = Real(2 * r);
+    ph.h = Real(scene.fluid.support * 2 * r);  // 4 r by default (He et al.)
+    ph.rest_density = Real(scene.fluid.rest_density);
+    ph.viscosity = Real(scene.fluid.viscosity);
+    ph.boundary_viscosity = Real(scene.fluid.boundary_viscosity.value_or(scene.fluid.viscosity));
+    ph.gravity = scene.simulation.gravity.cast<Real>();
+    w.kernel = CubicSpline(ph.h);
+    ph.mass = lattice_mass(w.kernel, ph.spacing, ph.rest_density);
+    w.domain = scene.domain ? *scene.domain : default_domain(scene, double(ph.h));
+}
+
+FluidSample sample_fluid(const Scene& scene, double r) {
+    FluidSample f;
+    for (std::size_t bi = 0; bi < scene.fluid_blocks.size(); ++bi) {
+        const auto& block = scene.fluid_blocks[bi];
+        auto pts = sample_block(block.box, 2 * r);
+        f.x.insert(f.x.end(), pts.begin(), pts.end());
+        f.v.insert(f.v.end(), pts.size(), block.velocity);
+        f.block_of.insert(f.block_of.end(), pts.size(), bi);
+    }
+    return f;
+}
+
+/// Boundary particles, sampled once at the fluid spacing r0 = 2 r = h / 2: the static
+/// boundaries first, then each moving boundary as one contiguous range (a moving body).
+/// Returns the sampled positions (double precision).
+std::vector<Vec3d> sample_boundaries(World& w, const Scene& scene, double r) {
+    std::vector<Vec3d> bx, bn;
+    w.moving_bodies.clear();
+    for (const bool moving : {false, true}) {
+        for (std::size_t j = 0; j < scene.boundaries.size(); ++j) {
+            const auto& b = scene.boundaries[j];
+            if (b.motion.has_value() != moving) continue;
+            auto s = sample_boundary(b, 2 * r, r);
+            const std::size_t begin = bx.size();
+            bx.insert(bx.end(), s.positions.begin(), s.positions.end());
+            bn.insert(bn.end(), s.normals.begin(), s.normals.end());
+            if (moving) w.moving_bodies.push_back(MovingBody{begin, bx.size(), j, Aabb{}, 0.0});
+        }
+        if (!moving) w.static_boundary_end = bx.size();
+    }
+    auto& bs = w.boundary.store;
+    bs.add(comp::position);
+    bs.add(comp::normal);
+    // Only scenes with a moving boundary get its columns (static scenes are unchanged).
+    if (!w.moving_bodies.empty()) {
+        bs.add(comp::rest_position);
+        bs.add(comp::velocity);
+    }
+    bs.resize(bx.size());
+    {
+        auto x = bs.get(comp::position);
+        auto n = bs.get(comp::normal);
+        for (std::size_t i = 0; i < bx.size(); ++i) {
+            x[i] = bx[i].cast<Real>();
+            n[i] = bn[i].cast<Real>();
+        }
+    }
+    if (!w.moving_bodies.empty()) {
+        // x0 is the sampled position; at t = 0 a body is at x0 + d(0) with velocity v(0)
+        // (d(0) is zero except for a sinusoid with a phase). BoundaryMotionSystem does the same
+        // at the start of every step.
+        auto x = bs.get(comp::position);
+        auto x0 = bs.get(comp::rest_position);
+        auto vb = bs.get(comp::velocity);
+        for (MovingBody& body : w.moving_bodies) {
+            const Motion& motion = *scene.boundaries[body.boundary].motion;
+            const Vec3d d = displacement(motion, 0.0);
+            const Vec3 v = velocity(motion, 0.0).cast<Real>();
+            body.bounds = Aabb{Vec3d::Constant(std::numeric_limits<double>::max()),
+                               Vec3d::Constant(std::numeric_limits<double>::lowest())};
+            for (std::size_t i = body.begin; i < body.end; ++i) {
+                x0[i] = x[i];
+                x[i] = (x0[i].cast<double>() + d).cast<Real>();
+                vb[i] = v;
+                body.bounds.min = body.bounds.min.cwiseMin(x[i].cast<double>());
+                body.bounds.max = body.bounds.max.cwiseMax(x[i].cast<double>());
+            }
+            body.speed = speed_bound(motion, 0.0);
+        }
+        for (std::size_t i = 0; i < w.static_boundary_end; ++i) x0[i] = x[i];
+    }
+
+    return bx;
+}
+
+/// Speed of sound: density fluctuation ~ (v_ref / c_s)^2 (Monaghan 1994) with
+/// v_ref = sqrt(2 |g| H), H the fluid's top above the lowest point of the domain; then the
+/// Tait stiffness B (He eq. 2).
+void choose_speed_of_sound(World& w, const Scene& scene, const FluidSample& fluid, const std::vector<Vec3d>& bx) {
+    Physics& ph = w.physics;
+    const std::vector<Vec3d>& xs = fluid.x;
+    const std::vector<Vec3d>& vs = fluid.v;
+    const double g = scene.simulation.gravity.norm();
+    double top = -std::numeric_limits<double>::max(), vmax0 = 0;
+    const Vec3d up = g > 0 ? Vec3d(-scene.simulation.gravity / g) : Vec3d::UnitY();
+    for (std::size_t i = 0; i < xs.size(); ++i) {
+        top = std::max(top, xs[i].dot(up));
+        vmax0 = std::max(vmax0, vs[i].norm());
+    }
+    // Emitted fluid enters at the emitter's height with its speed.
+    for (const auto& e : scene.emitters) {
+        top = std::max(top, e.position.dot(up));
+        vmax0 = std::max(vmax0, e.velocity.norm());
+    }
+    double bottom = std::numeric_limits<double>::max();
+    for (int c = 0; c < 8; ++c) {
+        const Vec3d corner((c & 1) ? w.domain.max[0] : w.domain.min[0], (c & 2) ? w.domain.max[1] : w.domain.min[1],
+                           (c & 4) ? w.domain.max[2] : w.domain.min[2]);
+        bottom = std::min(bottom, corner.dot(up));
+    }
+    if (!bx.empty()) {
+        bottom = std::numeric_limits<double>::max();
+        for (const auto& p : bx) bottom = std::min(bottom, p.dot(up));
+    }
+    ph.fluid_height = (xs.empty() && scene.emitters.empty()) ? 0.0 : std::max(0.0, top - bottom);
+    double vref = std::max(std::sqrt(2.0 * g * ph.fluid_height), vmax0);
+    if (vref <= 0) vref = 1.0;  // nothing moves and nothing falls: any stiffness is stable
+    ph.speed_of_sound = Real(scene.fluid.speed_of_sound ? *scene.fluid.speed_of_sound
+                                                        : vref / std::sqrt(scene.fluid.density_fluctuation));
+    ph.tait_b = ph.rest_density * ph.speed_of_sound * ph.speed_of_sound / Real(7);
+}
+
+/// Hydrostatic start: keep each block's bottom layer and compress the lattice along gravity
+/// with dy'/dy = rho0 / rho(d), rho(d) = rho0 (1 + rho0 g d / B)^(1/7) the Tait density of
+/// the pressure rho0 g d at depth d below the block's top (He eq. 2 inverted).
+void compress_hydrostatic(const World& w, const Scene& scene, FluidSample& fluid) {
+    const Physics& ph = w.physics;
+    const double r = scene.particle_radius();
+    const double g = scene.simulation.gravity.norm();
+    const Vec3d up = g > 0 ? Vec3d(-scene.simulation.gravity / g) : Vec3d::UnitY();
+    std::vector<Vec3d>& xs = fluid.x;
+    const std::vector<std::size_t>& block_of = fluid.block_of;
+    if (g > 0) {
+        for (std::size_t bi = 0; bi < scene.fluid_blocks.size(); ++bi) {
+            const auto& block = scene.fluid_blocks[bi];
+            if (!block.hydrostatic) continue;
+            double top_b = -std::numeric_limits<double>::max(), bottom_b = std::numeric_limits<double>::max();
+            for (std::size_t i = 0; i < xs.size(); ++i)
+                if (block_of[i] == bi) {
+                    top_b = std::max(top_b, xs[i].dot(up) + r);
+                    bottom_b = std::min(bottom_b, xs[i].dot(up));
+                }
+            const double b_eos = double(ph.tait_b), rho0 = double(ph.rest_density);
+            auto compression = [&](double height) {  // rho0 / rho at this height
+                const double d = std::max(0.0, top_b - height);
+                return std::pow(1.0 + rho0 * g * d / b_eos, -1.0 / 7.0);
+            };
+            for (std::size_t i = 0; i < xs.size(); ++i) {
+                if (block_of[i] != bi) continue;
+                const double y = xs[i].dot(up);
+                const int steps = 16;  // midpoint rule; the integrand is smooth and near 1
+                double y_new = bottom_b;
+                for (int k = 0; k < steps; ++k)
+                    y_new += (y - bottom_b) / steps * compression(bottom_b + (k + 0.5) * (y - bottom_b) / steps);
+                xs[i] += (y_new - y) * up;
+            }
+        }
+    }
+}
+
+/// The fluid set: position, velocity and id (the sampling order) for every lattice point.
+void write_fluid(World& w, const FluidSample& fluid) {
+    const std::vector<Vec3d>& xs = fluid.x;
+    const std::vector<Vec3d>& vs = fluid.v;
+    auto& fs = w.fluid.store;
+    fs.add(comp::position);
+    fs.add(comp::velocity);
+    fs.add(comp::id);
+    fs.resize(xs.size());
+    {
+        auto x = fs.get(comp::position);
+        auto v = fs.get(comp::velocity);
+        auto id = fs.get(comp::id);
+        for (std::size_t i = 0; i < xs.size(); ++i) {
+            x[i] = xs[i].cast<Real>();
+            v[i] = vs[i].cast<Real>();
+            id[i] = std::uint32_t(i);
+        }
+    }
+
+}
+
+/// The grids: the fluid's over the domain, the boundary's over the domain and every boundary
+/// particle; static boundary particles are put in z-order once.
+void build_grids(World& w, const std::vector<Vec3d>& bx) {
+    const Physics& ph = w.physics;
+    auto& bs = w.boundary.store;
+    w.fluid_grid = UniformGrid(w.domain, ph.h);
+    Aabb bbox = w.domain;
+    for (const auto& p : bx) {
+        bbox.min = bbox.min.cwiseMin(p);
+        bbox.max = bbox.max.cwiseMax(p);
+    }
+    for (const MovingBody& body : w.moving_bodies) {
+        bbox.min = bbox.min.cwiseMin(body.bounds.min);
+        bbox.max = bbox.max.cwiseMax(body.bounds.max);
+    }
+    w.boundary_grid = UniformGrid(bbox, ph.h);
+    if (!bx.empty()) {
+        // Static boundary particles never move: store them in z-order once, then index the
+        // grid. Moving bodies keep their ranges (the permutation is the identity there); the
+        // boundary motion system rebuilds the grid every step.
+        const std::span<const Vec3> all = bs.get(comp::position);
+        std::vector<Index> perm = zorder_permutation(w.boundary_grid, all.subspan(0, w.static_boundary_end));
+        for (std::size_t i = w.static_boundary_end; i < all.size(); ++i) perm.push_back(Index(i));
+        bs.permute(perm);
+        w.boundary_grid.build(bs.get(comp::position));
+    }
+}
+
+}  // namespace
+
+void initialise_world(World& w, const Scene& scene) {
+    derive_constants(w, scene);
+    const double r = scene.particle_radius();
+    FluidSample fluid = sample_fluid(scene, r);
+    const std::vector<Vec3d> bx = sample_boundaries(w, scene, r);
+    choose_speed_of_sound(w, scene, fluid, bx);
+    compress_hydrostatic(w, scene, fluid);
+    write_fluid(w, fluid);
+    build_grids(w, bx);
+    w.clock = Clock{};
+    w.step_size = StepSize{};
+    w.step_size.set(scene.simulation.stepping.dt);
+}
+
+}  // namespace sph

@@ -1,0 +1,358 @@
+#include "engine/run/checkpoint.hpp"
+
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <type_traits>
+
+#include "engine/run/io.hpp"
+#include "engine/run/simulation.hpp"
+
+#include <limits>
+
+namespace sph {
+
+namespace {
+
+constexpr char kMagic[8] = {'S', 'P', 'H', 'C', 'K', 'P', 'T', '\0'};
+constexpr std::size_t kHeaderBytes = 8 + 4 + 4 + 8 + 8;
+
+
+template <class T>
+void put(std::string& out, T v) {
+    static_assert(std::is_trivially_copyable_v<T>);
+    out.append(reinterpret_cast<const char*>(&v), sizeof v);
+}
+
+template <class T>
+std::string raw_vector(const std::vector<T>& v) {
+    return std::string(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T));
+}
+
+/// Reads values from a section, failing with the checkpoint's name when it is too short.
+class Cursor {
+public:
+    Cursor(const std::string& data, std::string what, const std::filesystem::path& file)
+        : m_data(data), m_what(std::move(what)), m_file(file) {}
+    template <class T>
+    T get() {
+        T v;
+        need(sizeof v);
+        std::memcpy(&v, m_data.data() + m_pos, sizeof v);
+        m_pos += sizeof v;
+        return v;
+    }
+    template <class T>
+    void get_vector(std::vector<T>& v, std::size_t n) {
+        need(n * sizeof(T));
+        v.resize(n);
+        if (n) std::memcpy(v.data(), m_data.data() + m_pos, n * sizeof(T));
+        m_pos += n * sizeof(T);
+    }
+    std::string_view rest() const { return std::string_view(m_data).substr(m_pos); }
+
+private:
+    void need(std::size_t n) const {
+        if (m_pos + n > m_data.size())
+            throw CheckpointError(m_file.string() + ": section '" + m_what + "' is truncated");
+    }
+    const std::string& m_data;
+    std::string m_what;
+    const std::filesystem::path& m_file;
+    std::size_t m_pos = 0;
+};
+
+std::string lists_section(const NeighbourLists& l) {
+    std::string s;
+    put(s, std::uint64_t(l.capacity));
+    put(s, std::uint64_t(l.count.size()));
+    put(s, std::uint64_t(l.indices.size()));
+    s += raw_vector(l.count);
+    s += raw_vector(l.indices);
+    return s;
+}
+
+void restore_lists(NeighbourLists& l, const std::string& data, const std::string& what,
+                   const std::filesystem::path& file) {
+    Cursor c(data, what, file);
+    l.capacity = Index(c.get<std::uint64_t>());
+    const auto nc = std::size_t(c.get<std::uint64_t>());
+    const auto ni = std::size_t(c.get<std::uint64_t>());
+    c.get_vector(l.count, nc);
+    c.get_vector(l.indices, ni);
+}
+
+std::string column_section(const ComponentStore& store, const std::string& name) {
+    std::string s;
+    put(s, std::uint32_t(store.element_size(name)));
+    const auto raw = store.raw(name);
+    s.append(reinterpret_cast<const char*>(raw.data()), raw.size());
+    return s;
+}
+
+void restore_store(ComponentStore& store, const std::string& set, const Checkpoint& ck) {
+    const std::string prefix = set + "/";
+    std::vector<std::string> saved;
+    for (const auto& [name, data] : ck.sections)
+        if (name.rfind(prefix, 0) == 0) saved.push_back(name.substr(prefix.size()));
+    if (saved != store.names()) {
+        std::string a, b;
+        for (const auto& n : saved) a += (a.empty() ? "" : ", ") + n;
+        for (const auto& n : store.names()) b += (b.empty() ? "" : ", ") + n;
+        throw CheckpointError(ck.file.string() + ": the checkpoint's " + set + " columns (" + a +
+                              ") are not the ones this scene's method uses (" + b + ")");
+    }
+    std::size_t count = SIZE_MAX;
+    for (const auto& name : saved) {
+        const std::string& data = ck.sections.at(prefix + name);
+        Cursor c(data, prefix + name, ck.file);
+        const std::uint32_t size = c.get<std::uint32_t>();
+        if (size != store.element_size(name) || c.rest().size() % size != 0)
+            throw CheckpointError(ck.file.string() + ": column " + prefix + name + " has " + std::to_string(size) +
+                                  "-byte values, this build stores " + std::to_string(store.element_size(name)));
+        const std::size_t n = c.rest().size() / size;
+        if (count != SIZE_MAX && n != count)
+            throw CheckpointError(ck.file.string() + ": the " + set + " columns have different lengths");
+        count = n;
+    }
+    if (count == SIZE_MAX) count = 0;
+    store.resize(count);
+    for (const auto& name : saved) {
+        const std::string& data = ck.sections.at(prefix + name);
+        auto raw = store.raw(name);
+        std::memcpy(raw.data(), data.data() + 4, raw.size());
+    }
+}
+
+/// The clock, the step size, the statistics, the rollback state and the counters, by name.
+/// Doubles are written as their exact bit patterns (JSON numbers would round-trip too, but
+/// infinities would not).
+nlohmann::json step_section(const World& w) {
+    const auto bits = [](double v) {
+        std::uint64_t b;
+        std::memcpy(&b, &v, 8);
+        return b;
+    };
+    nlohmann::json j;
+    j["clock"] = {{"t_ticks", w.clock.t_ticks}, {"step", w.clock.step}, {"rollbacks", w.clock.rollbacks}};
+    j["step_size"] = {{"dt_ticks", w.step_size.dt_ticks}, {"dt", bits(w.step_size.dt)},
+                      {"dt_stable", bits(w.step_size.dt_stable)}};
+    j["stats"] = {{"rho_err_avg", bits(w.stats.rho_err_avg)}, {"rho_err_max", bits(w.stats.rho_err_max)},
+                  {"v_max", bits(w.stats.v_max)}, {"a_max", bits(w.stats.a_max)},
+                  {"a_max_particle", w.stats.a_max_particle}};
+    j["rollback"] = {{"resume_dt", bits(w.rollback.resume_dt)}};
+    j["counters"] = nlohmann::json::object();
+    for (const auto& [name, v] : w.counters) j["counters"][name] = v;
+    return j;
+}
+
+void restore_step(World& w, const std::string& text, const std::filesystem::path& file) {
+    const auto real = [](std::uint64_t b) {
+        double v;
+        std::memcpy(&v, &b, 8);
+        return v;
+    };
+    try {
+        const nlohmann::json j = nlohmann::json::parse(text);
+        const auto& c = j.at("clock");
+        w.clock.t_ticks = c.at("t_ticks").get<Tick>();
+        w.clock.t = to_seconds(w.clock.t_ticks);
+        w.clock.step = c.at("step").get<std::int64_t>();
+        w.clock.rollbacks = c.at("rollbacks").get<std::uint64_t>();
+        w.clock.t_stop = std::numeric_limits<double>::infinity();
+        const auto& d = j.at("step_size");
+        w.step_size.dt_ticks = d.at("dt_ticks").get<Tick>();
+        w.step_size.dt = real(d.at("dt").get<std::uint64_t>());
+        w.step_size.dt_stable = real(d.at("dt_stable").get<std::uint64_t>());
+        const auto& st = j.at("stats");
+        w.stats.rho_err_avg = real(st.at("rho_err_avg").get<std::uint64_t>());
+        w.stats.rho_err_max = real(st.at("rho_err_max").get<std::uint64_t>());
+        w.stats.v_max = real(st.at("v_max").get<std::uint64_t>());
+        w.stats.a_max = real(st.at("a_max").get<std::uint64_t>());
+        w.stats.a_max_particle = st.at("a_max_particle").get<Index>();
+        w.rollback.resume_dt = real(j.at("rollback").at("resume_dt").get<std::uint64_t>());
+        for (const auto& [name, v] : j.at("counters").items()) {
+            if (!w.counters.count(name))
+                throw CheckpointError(file.string() + ": section 'step' has counter '" + name +
+                                      "', which no system of this scene's method declares");
+            w.counters[name] = v.get<std::uint64_t>();
+        }
+    } catch (const nlohmann::json::exception& e) {
+        throw CheckpointError(file.string() + ": section 'step' is not this version's step state (" + e.what() + ")");
+    }
+}
+
+}  // namespace
+
+std::uint64_t fnv1a64(std::string_view bytes) {
+    std::uint64_t h = 14695981039346656037ull;
+    for (const char c : bytes) {
+        h ^= std::uint8_t(c);
+        h *= 1099511628211ull;
+    }
+    return h;
+}
+
+void write_checkpoint(const std::filesystem::path& file, const Simulation& sim, const nlohmann::json& meta) {
+    const World& w = sim.world();
+    std::map<std::string, std::string> sections;
+    sections["meta"] = meta.dump();
+    sections["step"] = step_section(w).dump();
+    for (const auto& [name, r] : w.resources.items())
+        if (r->lifetime() == Lifetime::Kept) sections["resource/" + name] = r->bytes();
+    for (const auto& name : w.fluid.store.names()) sections["fluid/" + name] = column_section(w.fluid.store, name);
+    for (const auto& name : w.boundary.store.names())
+        sections["boundary/" + name] = column_section(w.boundary.store, name);
+    sections["fluid_neighbours"] = lists_section(w.fluid_neighbours);
+    sections["boundary_neighbours"] = lists_section(w.boundary_neighbours);
+    sections["active_set"] = raw_vector(w.active_set);
+    sections["halo_set"] = raw_vector(w.halo_set);
+    std::string bodies;
+    for (const MovingBody& b : w.moving_bodies) {
+        put(bodies, std::uint64_t(b.begin));
+        put(bodies, std::uint64_t(b.end));
+        put(bodies, std::uint64_t(b.boundary));
+        for (int a = 0; a < 3; ++a) put(bodies, b.bounds.min[a]);
+        for (int a = 0; a < 3; ++a) put(bodies, b.bounds.max[a]);
+        put(bodies, b.speed);
+    }
+    sections["moving_bodies"] = bodies;
+
+    std::string payload;
+    for (const auto& [name, data] : sections) {
+        put(payload, std::uint32_t(name.size()));
+        payload += name;
+        put(payload, std::uint64_t(data.size()));
+        payload += data;
+    }
+    std::string out(kMagic, sizeof kMagic);
+    put(out, kCheckpointVersion);
+    put(out, std::uint32_t(sizeof(Real)));
+    put(out, std::uint64_t(payload.size()));
+    put(out, fnv1a64(payload));
+    AtomicFile f(file);
+    f.write(out);
+    f.write(payload);
+    f.commit();
+}
+
+Checkpoint read_checkpoint(const std::filesystem::path& file) {
+    const std::string name = file.string();
+    std::ifstream in(file, std::ios::binary);
+    if (!in) throw CheckpointError(name + ": cannot open checkpoint file (" + std::strerror(errno) + ")");
+    std::string all((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (all.size() < kHeaderBytes || std::memcmp(all.data(), kMagic, sizeof kMagic) != 0)
+        throw CheckpointError(name + ": not an sph checkpoint (expected the magic \"SPHCKPT\" at the start)");
+    std::uint32_t version, real_bytes;
+    std::uint64_t length, checksum;
+    std::memcpy(&version, all.data() + 8, 4);
+    std::memcpy(&real_bytes, all.data() + 12, 4);
+    std::memcpy(&length, all.data() + 16, 8);
+    std::memcpy(&checksum, all.data() + 24, 8);
+    if (version != kCheckpointVersion)
+        throw CheckpointError(name + ": checkpoint format version " + std::to_string(version) +
+                              ", expected version " + std::to_string(kCheckpointVersion) +
+                              " (written by another version of sph)");
+    if (real_bytes != sizeof(Real))
+        throw CheckpointError(name + ": written with " + std::to_string(real_bytes) +
+                              "-byte particle fields, this build uses " + std::to_string(sizeof(Real)) +
+                              " (SPH_DOUBLE differs)");
+    if (all.size() - kHeaderBytes != length)
+        throw CheckpointError(name + ": holds " + std::to_string(all.size() - kHeaderBytes) +
+                              " payload bytes, the header says " + std::to_string(length) + " (truncated?)");
+    const std::string_view payload = std::string_view(all).substr(kHeaderBytes);
+    const std::uint64_t actual = fnv1a64(payload);
+    if (actual != checksum) {
+        char buf[96];
+        std::snprintf(buf, sizeof buf, "checksum mismatch (stored %016llx, computed %016llx): the file is corrupt",
+                      static_cast<unsigned long long>(checksum), static_cast<unsigned long long>(actual));
+        throw CheckpointError(name + ": " + buf);
+    }
+    Checkpoint ck;
+    ck.file = file;
+    std::size_t pos = 0;
+    auto take = [&](std::size_t n) {
+        if (pos + n > payload.size()) throw CheckpointError(name + ": a section runs past the end of the payload");
+        const std::string_view v = payload.substr(pos, n);
+        pos += n;
+        return v;
+    };
+    while (pos < payload.size()) {
+        std::uint32_t nlen;
+        std::memcpy(&nlen, take(4).data(), 4);
+        const std::string key(take(nlen));
+        std::uint64_t dlen;
+        std::memcpy(&dlen, take(8).data(), 8);
+        ck.sections[key] = std::string(take(std::size_t(dlen)));
+    }
+    for (const char* required : {"meta", "step", "fluid_neighbours", "boundary_neighbours", "active_set", "halo_set",
+                                 "moving_bodies"})
+        if (!ck.sections.count(required))
+            throw CheckpointError(name + ": section '" + required + "' is missing");
+    try {
+        ck.meta = nlohmann::json::parse(ck.sections.at("meta"));
+    } catch (const nlohmann::json::exception& e) {
+        throw CheckpointError(name + ": section 'meta' is not JSON (" + e.what() + ")");
+    }
+    return ck;
+}
+
+void restore_checkpoint(Simulation& sim, const Checkpoint& ck) {
+    World& w = sim.world();
+    // The boundary is sampled from the scene again; a different sampling (another engine
+    // version) would silently change the physics, so the static part must match exactly.
+    if (ck.sections.count("boundary/position")) {
+        const std::string& b = ck.sections.at("boundary/position");
+        const auto now = w.boundary.store.raw("position");
+        const std::size_t n = std::min(now.size(), std::size_t(w.static_boundary_end) * sizeof(Vec3));
+        if (b.size() != 4 + now.size() || std::memcmp(b.data() + 4, now.data(), n) != 0)
+            throw CheckpointError(ck.file.string() +
+                                  ": the boundary particles differ from this scene's sampling (another scene "
+                                  "or another engine version)");
+    }
+    restore_store(w.fluid.store, "fluid", ck);
+    restore_store(w.boundary.store, "boundary", ck);
+    restore_lists(w.fluid_neighbours, ck.sections.at("fluid_neighbours"), "fluid_neighbours", ck.file);
+    restore_lists(w.boundary_neighbours, ck.sections.at("boundary_neighbours"), "boundary_neighbours", ck.file);
+    {
+        Cursor c(ck.sections.at("active_set"), "active_set", ck.file);
+        c.get_vector(w.active_set, ck.sections.at("active_set").size() / sizeof(Index));
+        Cursor h(ck.sections.at("halo_set"), "halo_set", ck.file);
+        h.get_vector(w.halo_set, ck.sections.at("halo_set").size() / sizeof(Index));
+    }
+    {
+        const std::string& data = ck.sections.at("moving_bodies");
+        Cursor c(data, "moving_bodies", ck.file);
+        const std::size_t record = 3 * 8 + 7 * 8;
+        if (data.size() != record * w.moving_bodies.size())
+            throw CheckpointError(ck.file.string() + ": the checkpoint has " + std::to_string(data.size() / record) +
+                                  " moving bodies, the scene " + std::to_string(w.moving_bodies.size()));
+        for (MovingBody& b : w.moving_bodies) {
+            b.begin = std::size_t(c.get<std::uint64_t>());
+            b.end = std::size_t(c.get<std::uint64_t>());
+            b.boundary = std::size_t(c.get<std::uint64_t>());
+            for (int a = 0; a < 3; ++a) b.bounds.min[a] = c.get<double>();
+            for (int a = 0; a < 3; ++a) b.bounds.max[a] = c.get<double>();
+            b.speed = c.get<double>();
+        }
+    }
+    restore_step(w, ck.sections.at("step"), ck.file);
+    // Every Kept resource of this scene's method, and no other.
+    for (const auto& [name, r] : w.resources.items()) {
+        if (r->lifetime() != Lifetime::Kept) continue;
+        const auto it = ck.sections.find("resource/" + name);
+        if (it == ck.sections.end())
+            throw CheckpointError(ck.file.string() + ": section 'resource/" + name + "' is missing");
+        try {
+            r->load(it->second);
+        } catch (const std::runtime_error& e) {
+            throw CheckpointError(ck.file.string() + ": section 'resource/" + name + "' " + e.what());
+        }
+    }
+    for (const auto& [key, data] : ck.sections)
+        if (key.rfind("resource/", 0) == 0 && !w.resources.has(key.substr(9)))
+            throw CheckpointError(ck.file.string() + ": section '" + key +
+                                  "' is a resource this scene's method does not have");
+}
+
+}  // namespace sph

@@ -1,0 +1,276 @@
+#include "engine/run/recorder.hpp"
+
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <iomanip>
+#include <sstream>
+
+#include "engine/data/components.hpp"
+#include "engine/core/errors.hpp"
+#include "engine/graph/system.hpp"
+#include "engine/run/io.hpp"
+
+namespace sph {
+
+double front_x(const World& w) {
+    // The largest x of a fluid particle with at least 4 fluid neighbours (so a lone droplet
+    // thrown ahead is not the front), in metres; 0 without such a particle.
+    const auto x = w.fluid.store.get(comp::position);
+    double front = -std::numeric_limits<double>::infinity();
+    for (std::size_t i = 0; i < x.size(); ++i)
+        if (i < w.fluid_neighbours.count.size() && w.fluid_neighbours.count[i] >= 4)
+            front = std::max(front, double(x[i].x()));
+    return std::isfinite(front) ? front : 0.0;
+}
+
+namespace {
+constexpr std::size_t kMaxPendingStats = std::size_t(4) << 20;  // bytes of rows held in memory
+}
+
+// The stats.csv schema: these columns in this order in every run (a counter no system of the
+// recipe declares reads 0), then any other declared counter by name, then the timings.
+constexpr std::array<const char*, 8> kCounterColumns{"collisions",        "active",
+                                                     "neighbour_searches", "force_evaluations",
+                                                     "boundary_contributions", "propagation_updates",
+                                                     "iterations",        "boundary_active"};
+
+std::vector<std::string> extra_counters(const World& w) {
+    std::vector<std::string> out;
+    for (const auto& [name, v] : w.counters) {
+        const bool standard = name == "updated" || name == "neighbour_pairs" ||
+                              std::find(kCounterColumns.begin(), kCounterColumns.end(), name) != kCounterColumns.end();
+        if (!standard) out.push_back(name);
+    }
+    return out;
+}
+
+std::string Recorder::header(const Simulation& sim) const {
+    std::ostringstream h;
+    h << "step,t,dt,updated,neighbours_per_particle,rho_err_avg,rho_err_max,v_max,a_max,collisions,"
+         "active,active_fraction,neighbour_searches,force_evaluations,boundary_contributions,"
+         "propagation_updates,iterations,boundary_active,rolled_back";
+    for (const auto& name : extra_counters(sim.world())) h << ',' << name;
+    h << ",wall_s";
+    for (const auto& s : sim.graph().systems()) h << ",ms_" << s->name();
+    h << '\n';
+    return h.str();
+}
+
+Recorder::Recorder(std::filesystem::path dir, const Simulation& sim)
+    : m_dir(std::move(dir)), m_probes(sim.world().scene.probes) {
+    std::filesystem::create_directories(m_dir);
+    m_pending = header(sim);
+    m_t0 = std::chrono::steady_clock::now();
+}
+
+Recorder::Recorder(std::filesystem::path dir, const Simulation& sim, const nlohmann::json& st)
+    : m_dir(std::move(dir)), m_probes(sim.world().scene.probes) {
+    std::filesystem::create_directories(m_dir);
+    m_frame = st.at("frame").get<std::size_t>();
+    m_next_frame_time = st.at("next_frame_time").get<double>();
+    m_collisions = st.at("collisions").get<std::uint64_t>();
+    m_active_fraction_sum = st.at("active_fraction_sum").get<double>();
+    m_dt_min = st.at("dt_min").get<double>();
+    m_dt_max = st.at("dt_max").get<double>();
+    m_rho_err_max = st.at("rho_err_max").get<double>();
+    m_steps = st.at("steps").get<std::uint64_t>();
+    m_rho_err_avg_max = st.at("rho_err_avg_max").get<double>();
+    for (const auto& [name, v] : st.at("counter_sums").items()) m_counter_sums[name] = v.get<double>();
+    for (const auto& [name, v] : st.at("counter_per_fluid_sums").items()) m_counter_per_fluid_sums[name] = v.get<double>();
+    for (const auto& f : st.at("fronts")) m_fronts.emplace_back(f.at(0).get<double>(), f.at(1).get<double>());
+    // The probe series so far (checkpoints of earlier versions have none: their probes restart
+    // at the resume time).
+    if (const auto it = st.find("probes"); it != st.end()) m_probes.restore(*it);
+    const std::uint64_t bytes = st.at("stats_bytes").get<std::uint64_t>();
+    const auto csv = m_dir / "stats.csv";
+    std::error_code ec;
+    const auto have = std::filesystem::file_size(csv, ec);
+    if (ec) {
+        m_pending = header(sim);  // a new directory: stats.csv starts at the checkpoint's step
+    } else if (have < bytes) {
+        throw InputError(csv.string() + ": holds " + std::to_string(have) + " bytes, expected at least the " +
+                         std::to_string(bytes) + " written before the checkpoint (resume into another --out)");
+    } else {
+        m_stats_bytes = bytes;
+        if (have > bytes) {
+            // Rows written after the checkpoint will be written again: keep only the prefix.
+            AtomicFile f(csv);
+            f.copy_prefix(csv, bytes);
+            f.commit();
+        }
+    }
+    m_t0 = std::chrono::steady_clock::now();
+}
+
+nlohmann::json Recorder::state() {
+    flush_stats();
+    return {{"frame", m_frame},
+            {"next_frame_time", m_next_frame_time},
+            {"collisions", m_collisions},
+            {"active_fraction_sum", m_active_fraction_sum},
+            {"dt_min", m_dt_min},
+            {"dt_max", m_dt_max},
+            {"rho_err_max", m_rho_err_max},
+            {"steps", m_steps},
+            {"rho_err_avg_max", m_rho_err_avg_max},
+            {"counter_sums", m_counter_sums},
+            {"counter_per_fluid_sums", m_counter_per_fluid_sums},
+            {"fronts", m_fronts},
+            {"stats_bytes", m_stats_bytes},
+            {"probes", m_probes.state()}};
+}
+
+void Recorder::begin(const Simulation& sim) {
+    m_probes.sample_due(sim.world());
+    if (sim.world().scene.simulation.frame_rate > 0) write_frame(sim);
+}
+
+void Recorder::write_frame(const Simulation& sim) {
+    char name[32];
+    std::snprintf(name, sizeof name, "frame_%05zu", m_frame);
+    sph::write_frame(m_dir / "frames" / name, sim.world());
+    ++m_frame;
+    m_next_frame_time = double(m_frame) / sim.world().scene.simulation.frame_rate;
+    flush_stats();
+}
+
+void Recorder::after_step(const Simulation& sim) {
+    const World& w = sim.world();
+    const StepRecord& rec = sim.last();
+    const StepStats& st = w.stats;
+    const auto c = [&](std::string_view name) { return w.counter_value(name); };
+    const std::uint64_t updated = c("updated"), active = c("active");
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - m_t0).count();
+    std::ostringstream row;
+    row << std::setprecision(9) << rec.step << ',' << rec.t << ',' << rec.dt << ',' << updated << ','
+        << (updated ? double(c("neighbour_pairs")) / double(updated) : 0.0) << ',' << st.rho_err_avg << ','
+        << st.rho_err_max << ',' << st.v_max << ',' << st.a_max << ',' << c("collisions") << ',' << active << ','
+        << (w.fluid.size() ? double(active) / double(w.fluid.size()) : 0.0);
+    for (const char* name : {"neighbour_searches", "force_evaluations", "boundary_contributions",
+                             "propagation_updates", "iterations", "boundary_active"})
+        row << ',' << c(name);
+    row << ',' << int(rec.rolled_back);
+    for (const auto& name : extra_counters(w)) row << ',' << c(name);
+    row << ',' << wall;
+    const auto& g = sim.graph();
+    row << std::setprecision(4);
+    for (std::size_t i = 0; i < g.systems().size(); ++i) row << ',' << g.last_seconds(i) * 1e3;
+    row << '\n';
+    m_pending += row.str();
+    m_collisions += c("collisions");
+    if (rec.rolled_back) return;  // a discarded step (rollback) counts in no statistic
+    if (w.fluid.size()) m_active_fraction_sum += double(active) / double(w.fluid.size());
+    // Per-particle averages and sums of every counter over the kept steps (System::summarise).
+    for (const auto& [name, v] : w.counters) {
+        m_counter_sums[name] += double(v);
+        if (w.fluid.size()) m_counter_per_fluid_sums[name] += double(v) / double(w.fluid.size());
+    }
+    m_rho_err_avg_max = std::max(m_rho_err_avg_max, st.rho_err_avg);
+    // The step the conditions allowed (a last step clipped to the end time is not a minimum).
+    const double dt_taken = rec.dt_stable > 0 ? rec.dt_stable : rec.dt;
+    m_dt_min = m_steps ? std::min(m_dt_min, dt_taken) : dt_taken;
+    m_dt_max = std::max(m_dt_max, dt_taken);
+    m_rho_err_max = std::max(m_rho_err_max, st.rho_err_max);
+    ++m_steps;
+    const double t = w.clock.t;
+    const double end = w.scene.simulation.end_time;
+    while (m_fronts.size() < 3 && t >= 0.25 * double(m_fronts.size() + 1) * end - 1e-9)
+        m_fronts.emplace_back(t, front_x(w));
+    m_probes.sample_due(w);
+    const double rate = w.scene.simulation.frame_rate;
+    if (rate > 0 && t >= m_next_frame_time - 1e-9) {
+        write_frame(sim);
+    } else if (m_pending.size() > kMaxPendingStats) {
+        flush_stats();
+    }
+}
+
+void Recorder::flush_stats() {
+    if (m_pending.empty()) return;
+    const auto csv = m_dir / "stats.csv";
+    AtomicFile f(csv);
+    if (m_stats_bytes > 0) f.copy_prefix(csv, m_stats_bytes);
+    f.write(m_pending);
+    f.commit();
+    m_stats_bytes += m_pending.size();
+    m_pending.clear();
+    m_probes.write(m_dir);
+}
+
+nlohmann::json Recorder::finish(const Simulation& sim, double wall_seconds, int threads) {
+    flush_stats();
+    const World& w = sim.world();
+    const auto& g = sim.graph();
+    nlohmann::json j;
+    j["scene"] = w.scene.name;
+    j["method"] = to_string(w.scene.simulation.method);
+    j["stepping"] = to_string(w.scene.simulation.stepping.mode);
+    if (w.scene.simulation.stepping.mode == SteppingMode::Individual)
+        j["activation"] = to_string(w.scene.simulation.stepping.activation);
+    j["fluid_particles"] = w.fluid.size();
+    j["boundary_particles"] = w.boundary.size();
+    j["simulated_time_s"] = sim.time();
+    j["steps"] = sim.steps();
+    j["wall_time_s"] = wall_seconds;
+    // Process CPU time (user + system): on a shared machine it varies far less than the wall
+    // time when other processes compete for the cores.
+    {
+        rusage u{};
+        getrusage(RUSAGE_SELF, &u);
+        j["cpu_time_s"] = double(u.ru_utime.tv_sec) + 1e-6 * double(u.ru_utime.tv_usec) +
+                          double(u.ru_stime.tv_sec) + 1e-6 * double(u.ru_stime.tv_usec);
+    }
+    j["threads"] = threads;
+    const double fps = wall_seconds > 0 ? double(w.fluid.size()) * double(sim.steps()) / wall_seconds : 0.0;
+    j["fluid_particle_steps_per_s"] = fps;
+    j["avg_dt_s"] = sim.steps() ? sim.time() / double(sim.steps()) : 0.0;
+    j["min_dt_s"] = m_dt_min;
+    j["max_dt_s"] = m_dt_max;
+    j["avg_active_fraction"] = m_steps ? m_active_fraction_sum / double(m_steps) : 0.0;
+    j["max_density_error"] = m_rho_err_max;
+    j["max_avg_density_error"] = m_rho_err_avg_max;
+    j["shocks"] = w.clock.rollbacks;
+    j["kept_steps"] = m_steps;
+    // What each system adds (a method's own figures: PCISPH's iterations and tracked maxima).
+    RunTotals totals;
+    totals.kept_steps = m_steps;
+    totals.counter_sums = &m_counter_sums;
+    totals.counter_per_fluid_sums = &m_counter_per_fluid_sums;
+    for (const auto& s : g.systems()) s->summarise(w, totals, j);
+    j["peak_memory_bytes"] = peak_memory_bytes();
+    const std::size_t bytes = sim.particle_bytes();
+    j["particle_data_bytes"] = bytes;
+    j["bytes_per_fluid_particle"] = w.fluid.size() ? double(bytes) / double(w.fluid.size()) : 0.0;
+    j["peak_memory_per_fluid_particle"] = w.fluid.size() ? double(peak_memory_bytes()) / double(w.fluid.size()) : 0.0;
+    j["physics"] = {{"particle_radius", w.physics.particle_radius},
+                    {"support_radius", w.physics.h},
+                    {"mass", w.physics.mass},
+                    {"speed_of_sound", w.physics.speed_of_sound},
+                    {"fluid_height", w.physics.fluid_height}};
+    j["frames"] = m_frame;
+    j["boundary_collisions_total"] = m_collisions;
+    j["front_x_m"] = front_x(w);
+    // The front at a quarter, half and three quarters of the end time (the first step ending
+    // at or after each), to compare modes while the surge is still running.
+    nlohmann::json fronts = nlohmann::json::array();
+    for (const auto& [t, x] : m_fronts) fronts.push_back({{"t", t}, {"x", x}});
+    j["front_x_m_at"] = fronts;
+    double total = 0;
+    for (std::size_t i = 0; i < g.systems().size(); ++i) total += g.total_seconds(i);
+    nlohmann::json systems = nlohmann::json::array();
+    for (std::size_t i = 0; i < g.systems().size(); ++i)
+        systems.push_back({{"name", g.systems()[i]->name()},
+                           {"seconds", g.total_seconds(i)},
+                           {"share", total > 0 ? g.total_seconds(i) / total : 0.0}});
+    j["systems"] = systems;
+    j["systems_total_s"] = total;
+    write_file_atomic(m_dir / "summary.json", j.dump(2) + "\n");
+    return j;
+}
+
+}  // namespace sph

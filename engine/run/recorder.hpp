@@ -1,0 +1,70 @@
+#pragma once
+/// @file recorder.hpp
+/// @brief Writes a run's outputs into one directory: stats.csv (a row per step), frames at
+/// the scene's frame rate (frames/frame_NNNNN.vtu/.bgeo/.ply), probe series (probes/<name>.csv, written with stats.csv)
+/// and summary.json at the end.
+/// Every file is replaced atomically (AtomicFile). stats.csv is committed at each frame, at
+/// each checkpoint, whenever 4 MiB of rows are pending, and at the end: the new file is the
+/// committed prefix copied from the old one plus the pending rows, so memory stays bounded
+/// and a killed run leaves a complete prefix of whole rows.
+#include <chrono>
+#include <map>
+#include <filesystem>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "engine/run/probes.hpp"
+#include "engine/run/simulation.hpp"
+
+namespace sph {
+
+/// @brief The front: the largest x of a fluid particle with at least 4 fluid neighbours.
+double front_x(const World& w);
+
+class Recorder {
+public:
+    Recorder(std::filesystem::path dir, const Simulation& sim);
+    /// @brief Continues a run from a checkpoint: `state` is what state() returned then; the
+    /// first stats_bytes bytes of dir/stats.csv are kept (a fresh stats.csv is started at the
+    /// checkpoint's step when the directory has none).
+    Recorder(std::filesystem::path dir, const Simulation& sim, const nlohmann::json& state);
+    /// @brief Called after every step: appends the stats row, writes a frame when due.
+    void after_step(const Simulation& sim);
+    /// @brief Writes the initial frame (t = 0).
+    void begin(const Simulation& sim);
+    /// @brief Flushes stats.csv and writes summary.json; returns the summary.
+    nlohmann::json finish(const Simulation& sim, double wall_seconds, int threads);
+
+    const std::filesystem::path& dir() const { return m_dir; }
+    std::size_t frames_written() const { return m_frame; }
+    /// @brief Commits stats.csv, then returns everything needed to continue the outputs
+    /// exactly (frame counter, next frame time, summary accumulators, committed CSV bytes).
+    nlohmann::json state();
+    /// @brief Commits the pending stats.csv rows.
+    void flush_stats();
+
+private:
+    void write_frame(const Simulation& sim);
+    std::string header(const Simulation& sim) const;
+
+    std::filesystem::path m_dir;
+    ProbeSet m_probes;  ///< the scene's probes, written to probes/<name>.csv with stats.csv
+    std::string m_pending;           ///< rows not yet committed to stats.csv
+    std::uint64_t m_stats_bytes = 0;  ///< bytes of stats.csv committed so far
+    std::size_t m_frame = 0;
+    std::uint64_t m_collisions = 0;
+    double m_active_fraction_sum = 0;  ///< sum over steps of active / fluid particles
+    double m_dt_min = 0, m_dt_max = 0, m_rho_err_max = 0;
+    std::uint64_t m_steps = 0;          ///< kept steps (a rolled-back step is not counted)
+    double m_rho_err_avg_max = 0;
+    /// Over kept steps: sum of each counter, and of each counter divided by the fluid count.
+    std::map<std::string, double, std::less<>> m_counter_sums, m_counter_per_fluid_sums;
+    double m_next_frame_time = 0;
+    std::vector<std::pair<double, double>> m_fronts;  ///< (t, front x) at 1/4, 1/2, 3/4 of the end
+    std::chrono::steady_clock::time_point m_t0;
+};
+
+}  // namespace sph

@@ -1,0 +1,219 @@
+#include "engine/run/simulation.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
+
+#include <cmath>
+#include <sstream>
+#include <tuple>
+#include <type_traits>
+
+#include "engine/data/components.hpp"
+#include "engine/core/errors.hpp"
+#include "engine/data/sampling.hpp"
+
+namespace sph {
+
+Simulation::Simulation(const Scene& scene, Recipe recipe) {
+    initialise_world(m_world, scene);
+    for (auto& s : recipe.setup) s->register_components(m_world);
+    for (auto& s : recipe.step) s->register_components(m_world);
+    if (!recipe.setup.empty()) {
+        SystemGraph setup(std::move(recipe.setup), m_world);
+        setup.run();
+    }
+    m_graph = std::make_unique<SystemGraph>(std::move(recipe.step), m_world);
+    m_rollback_steps = recipe.rollback_steps;
+    if (m_rollback_steps > 0) m_ring = std::make_unique<StateRing>(m_rollback_steps);
+    m_graph->set_after_system([this](std::size_t i) { trace_non_finite(i); });
+}
+
+namespace {
+
+/// Index of the first non-finite element of a column, or n.
+template <class T>
+std::size_t first_non_finite(std::span<const T> v) {
+    const std::size_t n = v.size();
+    return tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, n, 8192), n,
+        [&](const auto& r, std::size_t best) {
+            for (std::size_t i = r.begin(); i < r.end() && i < best; ++i) {
+                if constexpr (std::is_same_v<T, Vec3>) {
+                    if (!v[i].allFinite()) return i;
+                } else {
+                    if (!std::isfinite(v[i])) return i;
+                }
+            }
+            return best;
+        },
+        [](std::size_t a, std::size_t b) { return std::min(a, b); });
+}
+
+}  // namespace
+
+void Simulation::trace_non_finite(std::size_t system) {
+    // Cheap (a streaming read of the columns just written, ~1 % of a step) and it is what lets
+    // a NaN be reported with the system that produced it rather than the one that carried it.
+    const ComponentStore& store = m_world.fluid.store;
+    for (const auto& wr : m_graph->access(system).writes()) {
+        if (wr.rfind("fluid.", 0) != 0) continue;
+        const std::string col = wr.substr(6);
+        if (!store.has(col)) continue;
+        const std::type_info& t = store.type_of(col);
+        std::size_t bad = store.size();
+        if (t == typeid(Vec3))
+            bad = first_non_finite(store.get(Component<Vec3>{col}));
+        else if (t == typeid(Real))
+            bad = first_non_finite(store.get(Component<Real>{col}));
+        else if (t == typeid(double))
+            bad = first_non_finite(store.get(Component<double>{col}));
+        if (bad == store.size()) continue;
+        std::lock_guard lock(m_trace_mutex);
+        // Recipe order is a topological order of the graph: a value can only reach a later
+        // system, so the earliest one with a non-finite output is where it was produced.
+        if (system < m_non_finite.system) m_non_finite = NonFinite{system, bad, col};
+        return;
+    }
+}
+
+std::size_t Simulation::particle_bytes() const {
+    const World& w = m_world;
+    return w.fluid.store.bytes() + w.boundary.store.bytes() + w.fluid_grid.bytes() + w.boundary_grid.bytes() +
+           w.fluid_neighbours.bytes() + w.boundary_neighbours.bytes();
+}
+
+void Simulation::spatial_sort() {
+    auto perm = zorder_permutation(m_world.fluid_grid, m_world.fluid.store.get(comp::position));
+    m_world.fluid.store.permute(perm);
+    // Lists that are kept across steps (individual stepping reuses inactive particles' lists)
+    // follow the permutation; fluid->fluid entries are renumbered as well.
+    m_world.fluid_neighbours.permute(perm, true);
+    m_world.boundary_neighbours.permute(perm, false);
+}
+
+void Simulation::step() {
+    const int interval = m_world.scene.simulation.sort_interval;
+    if (interval > 0 && m_world.clock.step % interval == 0) spatial_sort();
+    if (m_ring) m_ring->save(m_world);
+    m_non_finite = NonFinite{};
+    m_graph->run();
+    m_last = StepRecord{m_world.clock.step, m_world.clock.t, m_world.step_size.dt, m_world.step_size.dt_stable, false};
+    if (m_ring && m_world.rollback.request_dt > 0) {
+        serve_rollback();
+        return;
+    }
+    check_step();
+    m_world.clock.t_ticks += m_world.step_size.dt_ticks;
+    m_world.clock.t = to_seconds(m_world.clock.t_ticks);
+    ++m_world.clock.step;
+}
+
+void Simulation::serve_rollback() {
+    // Back to the state `m_rollback_steps` steps ago (the particle columns, the clock and the
+    // Kept resources), resumed with the step the requesting system asked for. The step counter
+    // and the rollback count survive the restore; the statistics and counters of the discarded
+    // step stay in the world (they are not part of the saved state), so the outputs report it.
+    Rollback& rb = m_world.rollback;
+    const double resume_dt = rb.request_dt;
+    const Clock discarded = m_world.clock;
+    if (!(resume_dt >= m_world.scene.simulation.stepping.dt_min)) {
+        std::ostringstream os;
+        os << rb.reason << " at step " << discarded.step << " (t = " << discarded.t << " s): the step to resume with, "
+           << resume_dt << " s, is below dt_min = " << m_world.scene.simulation.stepping.dt_min << " s; v_max = "
+           << m_world.stats.v_max << " m/s, F_max = " << m_world.stats.a_max << " m/s^2 at particle "
+           << m_world.stats.a_max_particle;
+        throw SimulationError(os.str(), m_world.stats.a_max_particle, discarded.step, rb.requested_by);
+    }
+    m_ring->restore(m_world, m_rollback_steps);
+    m_world.clock.step = discarded.step + 1;
+    m_world.clock.rollbacks = discarded.rollbacks + 1;
+    m_last.rolled_back = true;
+    rb.request_dt = 0;
+    rb.resume_dt = resume_dt;
+}
+
+std::string Simulation::step_size_owner() const {
+    std::string owner = "the step size";
+    const std::string dt = key_of(res::dt);
+    for (std::size_t i = 0; i < m_graph->systems().size(); ++i)
+        if (m_graph->access(i).may_write(dt)) owner = m_graph->systems()[i]->name();
+    return owner;
+}
+
+void Simulation::run_until(double end_time, const std::function<void(const Simulation&)>& after_step) {
+    // Stop when the remaining time is below a millionth of a step, so round-off never adds
+    // a sliver step at the end.
+    m_world.clock.t_stop = end_time;
+    const Tick end = to_ticks(end_time + 0.5 * kSecondsPerTick);
+    while (m_world.clock.t_ticks < end) {
+        step();
+        if (after_step) after_step(*this);
+    }
+    m_world.clock.t_stop = std::numeric_limits<double>::infinity();
+}
+
+void Simulation::check_step() {
+    World& w = m_world;
+    const auto x = w.fluid.store.get(comp::position);
+    const auto v = w.fluid.store.get(comp::velocity);
+    const Aabb& d = w.domain;
+    // First offending particle by index (deterministic), or n when all are fine.
+    const std::size_t n = x.size();
+    const std::size_t bad = tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, n, 4096), n,
+        [&](const auto& r, std::size_t best) {
+            for (std::size_t i = r.begin(); i < r.end() && i < best; ++i) {
+                const bool finite = x[i].allFinite() && v[i].allFinite();
+                const Vec3d p = x[i].template cast<double>();
+                if (!finite || !d.contains(p)) return i;
+            }
+            return best;
+        },
+        [](std::size_t a, std::size_t b) { return std::min(a, b); });
+    const double dt = w.step_size.dt;
+    const auto& st = w.scene.simulation.stepping;
+    const auto& systems = m_graph->systems();
+    const bool traced = m_non_finite.system < systems.size();
+    if (bad == n && !traced) {
+        const double stable = w.step_size.dt_stable > 0 ? w.step_size.dt_stable : dt;  // a clipped last step is fine
+        if (!(stable >= st.dt_min) || !std::isfinite(dt)) {
+            std::ostringstream os;
+            os << "time step collapsed at step " << w.clock.step << " (t = " << w.clock.t << " s): dt = " << stable
+               << " s from system '" << step_size_owner() << "' is below dt_min = " << st.dt_min
+               << " s; the largest acceleration, " << w.stats.a_max << " m/s^2, is at particle "
+               << w.stats.a_max_particle;
+            throw SimulationError(os.str(), w.stats.a_max_particle, w.clock.step, step_size_owner());
+        }
+        return;
+    }
+    std::ostringstream os;
+    std::string culprit = "unknown";
+    if (!traced && x[bad].allFinite() && v[bad].allFinite()) {
+        const std::uint32_t id = w.fluid.store.has(comp::id.name) ? w.fluid.store.get(comp::id)[bad] : std::uint32_t(bad);
+        // Left the domain: the last system that wrote positions moved it.
+        for (std::size_t i = 0; i < systems.size(); ++i)
+            if (m_graph->access(i).may_write(key_of(fluid(comp::position)))) culprit = systems[i]->name();
+        os << "particle " << id << " left the domain at step " << w.clock.step << " (t = " << w.clock.t
+           << " s): position (" << x[bad].transpose() << ") is outside [" << d.min.transpose() << "] - ["
+           << d.max.transpose() << "], moved by system '" << culprit << "'";
+        throw SimulationError(os.str(), id, w.clock.step, culprit);
+    }
+    {
+        // Non-finite: traced while the step ran to the earliest system (in recipe order) whose
+        // output held a non-finite value; that value's particle is the one named.
+        std::size_t particle = bad;
+        std::string field = "position/velocity";
+        if (traced) {
+            culprit = systems[m_non_finite.system]->name();
+            particle = m_non_finite.particle;
+            field = m_non_finite.column;
+        }
+        const std::uint32_t pid =
+            w.fluid.store.has(comp::id.name) ? w.fluid.store.get(comp::id)[particle] : std::uint32_t(particle);
+        os << "particle " << pid << " became non-finite at step " << w.clock.step << " (t = " << w.clock.t
+           << " s): " << field << " is NaN or infinite, first produced by system '" << culprit << "'";
+        throw SimulationError(os.str(), pid, w.clock.step, culprit);
+    }
+}
+
+}  // namespace sph

@@ -1,0 +1,85 @@
+#pragma once
+/// @file simulation.hpp
+/// @brief Owns a World and the flow graph of a method's systems, and advances time.
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "engine/graph/system.hpp"
+#include "engine/run/state_ring.hpp"
+#include "engine/graph/system_graph.hpp"
+#include "engine/data/world.hpp"
+#include "engine/data/world_init.hpp"
+
+namespace sph {
+
+/// @brief A method is a recipe of systems chosen from the scene: `setup` runs once after
+/// sampling, `step` every step (both as flow graphs).
+struct Recipe {
+    std::vector<std::unique_ptr<System>> setup;
+    std::vector<std::unique_ptr<System>> step;
+    /// States kept for a rollback (0: none). A step system requests one through res::rollback
+    /// (request_dt > 0); Simulation::step then restores the state saved `rollback_steps` steps
+    /// back and hands the step to resume with back in res::rollback's resume_dt.
+    std::size_t rollback_steps = 0;
+};
+
+/// @brief The step just taken, as the outputs report it (also when it was rolled back and the
+/// clock no longer describes it).
+struct StepRecord {
+    std::int64_t step = 0;
+    double t = 0, dt = 0, dt_stable = 0;
+    bool rolled_back = false;
+};
+
+class Simulation {
+public:
+    /// @brief Samples the scene, registers the recipe's components, runs the setup graph.
+    Simulation(const Scene& scene, Recipe recipe);
+
+    /// @brief Advances one step. Throws SimulationError on a NaN, a particle outside the
+    /// domain or a step below dt_min, naming the particle, the step and the system.
+    void step();
+    /// @brief Steps until `end_time` (the scene's by default), calling `after_step` each step.
+    void run_until(double end_time, const std::function<void(const Simulation&)>& after_step = {});
+
+    World& world() { return m_world; }
+    const World& world() const { return m_world; }
+    double time() const { return m_world.clock.t; }
+    std::int64_t steps() const { return m_world.clock.step; }
+    /// @brief The step last taken.
+    const StepRecord& last() const { return m_last; }
+    const SystemGraph& graph() const { return *m_graph; }
+    /// @brief Bytes held by particle columns, grids and neighbour lists.
+    std::size_t particle_bytes() const;
+
+private:
+    void check_step();
+    void spatial_sort();
+    /// Scans the fluid columns system i writes for non-finite values (NaN, inf) and keeps
+    /// the earliest system in recipe order that produced one this step.
+    void trace_non_finite(std::size_t system);
+
+    /// Serves a rollback request after the graph ran: restores the ring, keeps the record.
+    void serve_rollback();
+    /// The system that owns the step size (the last in recipe order that writes res::dt).
+    std::string step_size_owner() const;
+
+    World m_world;
+    std::unique_ptr<SystemGraph> m_graph;
+    StepRecord m_last;
+    std::size_t m_rollback_steps = 0;
+    std::unique_ptr<StateRing> m_ring;
+    /// The first non-finite value of the step: system (recipe index), particle, column.
+    struct NonFinite {
+        std::size_t system = SIZE_MAX;
+        std::size_t particle = 0;
+        std::string column;
+    };
+    std::mutex m_trace_mutex;
+    NonFinite m_non_finite;
+};
+
+}  // namespace sph

@@ -1,0 +1,22 @@
+#include "systems/methods/recipes.hpp"
+
+#include "systems/methods/pcisph.hpp"
+#include "systems/methods/wcsph.hpp"
+
+namespace sph {
+
+Recipe make_recipe(const Scene& scene) {
+    switch (scene.simulation.method) {
+        case Method::Wcsph:
+            return make_wcsph_recipe(scene);
+        case Method::Pcisph:
+            return make_pcisph_recipe(scene);
+    }
+    return make_wcsph_recipe(scene);
+}
+
+std::unique_ptr<Simulation> make_simulation(const Scene& scene) {
+    return std::make_unique<Simulation>(scene, make_recipe(scene));
+}
+
+}  // namespace sph
