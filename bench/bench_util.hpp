@@ -4,8 +4,8 @@
 #include <memory>
 #include <random>
 
-#include "engine/components.hpp"
-#include "engine/simulation.hpp"
+#include "engine/data/components.hpp"
+#include "engine/run/simulation.hpp"
 
 namespace sph::bench {
 

@@ -14,12 +14,12 @@
 
 #include <random>
 
-#include "engine/components.hpp"
-#include "engine/probes.hpp"
+#include "engine/data/components.hpp"
+#include "engine/run/probes.hpp"
 #include "systems/boundary/boundary_collision_system.hpp"
 #include "systems/boundary/boundary_motion_system.hpp"
 #include "systems/integrate/symplectic_euler_system.hpp"
-#include "systems/methods/wcsph.hpp"
+#include "systems/methods/recipes.hpp"
 #include "systems/metrics/step_stats_system.hpp"
 #include "systems/neighbours/neighbour_search_system.hpp"
 #include "systems/timestep/global_dt_system.hpp"
@@ -62,12 +62,14 @@ void sizes(benchmark::internal::Benchmark* b) {
     b->Unit(benchmark::kMillisecond)->UseRealTime();
 }
 
-template <class S>
-void run_system(benchmark::State& state, S system, bool moving = false) {
+/// Times one system made by `make(scene)` on the tank.
+template <class Make>
+void bench_system(benchmark::State& state, Make make, bool moving = false) {
     auto sim = tank(std::size_t(state.range(0)), moving);
     World& w = sim->world();
+    auto system = make(w.scene);
     for (auto _ : state) {
-        system.run(w);
+        run_system(system, w);
         benchmark::ClobberMemory();
     }
     counters(state, w, double(w.fluid.size()));
@@ -86,7 +88,7 @@ static void BM_BoundaryNeighbours(benchmark::State& state) {
         if (double((i * 2654435761u) % 1000u) < 1000.0 * share) w.active_set.push_back(Index(i));
     BoundaryNeighbourSystem system(individual);
     for (auto _ : state) {
-        system.run(w);
+        run_system(system, w);
         benchmark::ClobberMemory();
     }
     counters(state, w, individual ? double(w.active_set.size()) : double(w.fluid.size()));
@@ -96,19 +98,19 @@ static void BM_BoundaryNeighbours(benchmark::State& state) {
 BENCHMARK(BM_BoundaryNeighbours)->ArgsProduct({{10'000, 100'000, 1'000'000}, {1000, 500, 100, 10}})
     ->Unit(benchmark::kMillisecond)->UseRealTime();
 
-static void BM_BoundaryCollision(benchmark::State& state) { run_system(state, BoundaryCollisionSystem(false)); }
+static void BM_BoundaryCollision(benchmark::State& state) { bench_system(state, [](const Scene& s) { return BoundaryCollisionSystem(s.boundaries, false); }); }
 BENCHMARK(BM_BoundaryCollision)->Apply(sizes);
 
-static void BM_BoundaryMotion(benchmark::State& state) { run_system(state, BoundaryMotionSystem(), true); }
+static void BM_BoundaryMotion(benchmark::State& state) { bench_system(state, [](const Scene& s) { return BoundaryMotionSystem(s.boundaries); }, true); }
 BENCHMARK(BM_BoundaryMotion)->Apply(sizes);
 
-static void BM_StepStats(benchmark::State& state) { run_system(state, StepStatsSystem(false)); }
+static void BM_StepStats(benchmark::State& state) { bench_system(state, [](const Scene&) { return StepStatsSystem(false); }); }
 BENCHMARK(BM_StepStats)->Apply(sizes);
 
-static void BM_GlobalDt(benchmark::State& state) { run_system(state, GlobalDtSystem()); }
+static void BM_GlobalDt(benchmark::State& state) { bench_system(state, [](const Scene& s) { return GlobalDtSystem(s.simulation.stepping); }); }
 BENCHMARK(BM_GlobalDt)->Apply(sizes);
 
-static void BM_SymplecticEuler(benchmark::State& state) { run_system(state, SymplecticEulerSystem()); }
+static void BM_SymplecticEuler(benchmark::State& state) { bench_system(state, [](const Scene&) { return SymplecticEulerSystem(); }); }
 BENCHMARK(BM_SymplecticEuler)->Apply(sizes);
 
 // A scene's probes, sampled once per iteration: a front (neighbours), a height line, an

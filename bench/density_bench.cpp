@@ -11,10 +11,10 @@ static void BM_DensitySystem(benchmark::State& state) {
     auto w = bench::lattice_world(std::size_t(state.range(0)));
     DensitySystem density(false);
     density.register_components(*w);
-    FluidGridSystem().run(*w);
-    FluidNeighbourSystem().run(*w);
+    run_system(FluidGridSystem(), *w);
+    run_system(FluidNeighbourSystem(), *w);
     for (auto _ : state) {
-        density.run(*w);
+        run_system(density, *w);
         benchmark::ClobberMemory();
     }
     const double n = double(w->fluid.size());

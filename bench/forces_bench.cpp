@@ -20,12 +20,12 @@ static void BM_ForcesSystem(benchmark::State& state) {
     density.register_components(*w);
     correction.register_components(*w);
     forces.register_components(*w);
-    FluidGridSystem().run(*w);
-    FluidNeighbourSystem().run(*w);
-    density.run(*w);
-    correction.run(*w);
+    run_system(FluidGridSystem(), *w);
+    run_system(FluidNeighbourSystem(), *w);
+    run_system(density, *w);
+    run_system(correction, *w);
     for (auto _ : state) {
-        forces.run(*w);
+        run_system(forces, *w);
         benchmark::ClobberMemory();
     }
     const double n = double(w->fluid.size());
@@ -45,11 +45,11 @@ static void BM_GradientCorrection(benchmark::State& state) {
     GradientCorrectionSystem correction(false, false);
     density.register_components(*w);
     correction.register_components(*w);
-    FluidGridSystem().run(*w);
-    FluidNeighbourSystem().run(*w);
-    density.run(*w);
+    run_system(FluidGridSystem(), *w);
+    run_system(FluidNeighbourSystem(), *w);
+    run_system(density, *w);
     for (auto _ : state) {
-        correction.run(*w);
+        run_system(correction, *w);
         benchmark::ClobberMemory();
     }
     const double n = double(w->fluid.size());

@@ -36,32 +36,33 @@ struct Pipeline {
         systems.push_back(std::make_unique<GradientCorrectionSystem>(false, true));
         systems.push_back(std::make_unique<ForcesSystem>(false, true));
         systems.push_back(std::make_unique<DtPropagationSystem>());
-        systems.push_back(std::make_unique<IndividualGlobalDtSystem>());
+        systems.push_back(std::make_unique<IndividualGlobalDtSystem>(w->scene.simulation.stepping.activation,
+                                                                      w->scene.simulation.stepping.dt_max));
         systems.push_back(std::make_unique<AsyncIntegrationSystem>());
         for (auto& s : systems) s->register_components(*w);
         // As in a simulation, the first step evaluates every particle (density, forces, base
         // state of He Alg. 2 lines 19-21); then a scattered share is due at the second step.
-        FluidGridSystem().run(*w);
-        FluidNeighbourSystem().run(*w);
+        run_system(FluidGridSystem(), *w);
+        run_system(FluidNeighbourSystem(), *w);
         auto t_last = w->fluid.store.get(comp::t_last);
         auto dt = w->fluid.store.get(comp::dt);
         std::ranges::fill(t_last, Tick(0));
         std::ranges::fill(dt, 1e-4);
-        w->step.t_ticks = to_ticks(1e-4);  // t_last + dt_i <= t: all due
-        w->step.t = 1e-4;
-        for (auto& s : systems) s->run(*w);
+        w->clock.t_ticks = to_ticks(1e-4);  // t_last + dt_i <= t: all due
+        w->clock.t = 1e-4;
+        for (auto& s : systems) run_system(*s, *w);
         const Tick now = to_ticks(1e-3);
         for (std::size_t i = 0; i < t_last.size(); ++i) {
             const bool due = double((i * 2654435761u) % 1000u) < 1000.0 * active_share;
             t_last[i] = due ? 0 : now;
             dt[i] = 1e-4;
         }
-        w->step.t_ticks = now;
-        w->step.t = to_seconds(now);
+        w->clock.t_ticks = now;
+        w->clock.t = to_seconds(now);
         // The deadline rule (select_active_system.hpp) looks one last stable step ahead: with
         // it at 1e-4 s the particles just evaluated (due at now + 1e-4 s) stay asleep.
-        w->step.dt_stable = 1e-4;
-        for (auto& s : systems) s->run(*w);
+        w->step_size.dt_stable = 1e-4;
+        for (auto& s : systems) run_system(*s, *w);
     }
     System& get(const std::string& name) {
         for (auto& s : systems)
@@ -70,11 +71,11 @@ struct Pipeline {
     }
 };
 
-void run_system(benchmark::State& state, const std::string& name) {
+void bench_named(benchmark::State& state, const std::string& name) {
     Pipeline p(std::size_t(state.range(0)), double(state.range(1)) / 1000.0);
     System& s = p.get(name);
     for (auto _ : state) {
-        s.run(*p.w);
+        run_system(s, *p.w);
         benchmark::ClobberMemory();
     }
     const double n = double(p.w->fluid.size());
@@ -92,7 +93,7 @@ void args(benchmark::internal::Benchmark* b) {
 }  // namespace
 
 #define SPH_INDIVIDUAL_BENCH(system)                                                          \
-    static void BM_Individual_##system(benchmark::State& state) { run_system(state, #system); } \
+    static void BM_Individual_##system(benchmark::State& state) { bench_named(state, #system); } \
     BENCHMARK(BM_Individual_##system)->Apply(args)
 
 SPH_INDIVIDUAL_BENCH(select_active);
@@ -102,5 +103,5 @@ SPH_INDIVIDUAL_BENCH(density);
 SPH_INDIVIDUAL_BENCH(gradient_correction);
 SPH_INDIVIDUAL_BENCH(forces);
 SPH_INDIVIDUAL_BENCH(dt_propagation);
-SPH_INDIVIDUAL_BENCH(global_dt);
+SPH_INDIVIDUAL_BENCH(individual_dt);
 SPH_INDIVIDUAL_BENCH(async_integrate);

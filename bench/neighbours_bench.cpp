@@ -11,8 +11,8 @@ static void BM_NeighbourSearch(benchmark::State& state) {
     FluidGridSystem grid;
     FluidNeighbourSystem lists;
     for (auto _ : state) {
-        grid.run(*w);
-        lists.run(*w);
+        run_system(grid, *w);
+        run_system(lists, *w);
         benchmark::ClobberMemory();
     }
     const double n = double(w->fluid.size());

@@ -5,8 +5,8 @@
 #include <benchmark/benchmark.h>
 #include <tbb/global_control.h>
 
-#include "engine/state_ring.hpp"
-#include "systems/methods/wcsph.hpp"
+#include "engine/run/state_ring.hpp"
+#include "systems/methods/recipes.hpp"
 
 using namespace sph;
 
@@ -20,7 +20,7 @@ static void BM_PcisphStep_CornerBreakingDam(benchmark::State& state) {
     const double n = double(sim->world().fluid.size());
     state.SetItemsProcessed(state.iterations() * std::int64_t(n));
     state.counters["fluid_particles"] = n;
-    state.counters["active_boundary_per_fluid"] = double(sim->world().step.boundary_active) / n;
+    state.counters["active_boundary_per_fluid"] = double(sim->world().counter_value("boundary_active")) / n;
     state.counters["neighbours_per_particle"] = double(sim->world().fluid_neighbours.total()) / n;
 }
 BENCHMARK(BM_PcisphStep_CornerBreakingDam)->Arg(1)->Arg(2)->ArgName("threads")->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(3.0);

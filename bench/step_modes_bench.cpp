@@ -6,8 +6,8 @@
 #include <benchmark/benchmark.h>
 #include <tbb/global_control.h>
 
-#include "engine/errors.hpp"
-#include "systems/methods/wcsph.hpp"
+#include "engine/core/errors.hpp"
+#include "systems/methods/recipes.hpp"
 
 using namespace sph;
 
@@ -22,7 +22,7 @@ void step_mode(benchmark::State& state, const std::string& mode) {
     double active = 0;
     for (auto _ : state) {
         sim->step();
-        active += double(sim->world().step.active);
+        active += double(sim->world().counter_value("active"));
     }
     const double n = double(sim->world().fluid.size());
     state.SetItemsProcessed(state.iterations() * std::int64_t(n));

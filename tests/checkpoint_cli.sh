@@ -109,7 +109,7 @@ ck=$tmp/a/checkpoints/$first
 check "corrupt checkpoint exits 2 naming the checksum (got $rc)" '[ $rc -eq 2 ] && grep -q "corrupt.sphckpt: checksum mismatch" "$tmp/e1" && [ ! -e "$tmp/c1" ]'
 "$py" -c "b = bytearray(open('$ck','rb').read()); b[8] = 7; open('$tmp/v7.sphckpt','wb').write(b)"
 "$run" --resume "$tmp/v7.sphckpt" --out "$tmp/c2" 2>"$tmp/e2"; rc=$?
-check "wrong-version checkpoint exits 2 (got $rc)" '[ $rc -eq 2 ] && grep -q "v7.sphckpt: checkpoint format version 7, expected version 1" "$tmp/e2"'
+check "wrong-version checkpoint exits 2 (got $rc)" '[ $rc -eq 2 ] && grep -q "v7.sphckpt: checkpoint format version 7, expected version 2" "$tmp/e2"'
 head -c 1000 "$ck" > "$tmp/short.sphckpt"
 "$run" --resume "$tmp/short.sphckpt" --out "$tmp/c3" 2>"$tmp/e3"; rc=$?
 check "truncated checkpoint exits 2 (got $rc)" '[ $rc -eq 2 ] && grep -q "(truncated?)" "$tmp/e3"'

@@ -1,6 +1,6 @@
 #pragma once
 // Small scenes built in code for the tests (no scene file involved).
-#include "engine/scene.hpp"
+#include "engine/data/scene.hpp"
 
 namespace sph::test {
 

@@ -132,11 +132,14 @@ struct ParticleSet {
 /// @brief Everything a run holds. Systems never get a World: they get a Context (context.hpp)
 /// made from their declared Access, which hands out the parts below by typed handle (res::,
 /// counter::, fluid(comp::...)). The constants (physics, kernel, domain, clock) are read-only
-/// for systems. Not copyable: handles point into it.
+/// for systems. Movable, not copyable (a copy would duplicate the owned resources silently);
+/// never moved once a graph's contexts refer to it.
 struct World {
     World() = default;
     World(const World&) = delete;
     World& operator=(const World&) = delete;
+    World(World&&) = default;
+    World& operator=(World&&) = default;
 
     Scene scene;  ///< the scene as loaded (outputs and probes read it; systems get parameters)
     Physics physics;

@@ -54,5 +54,6 @@ public:
 /// @brief Runs one system outside a graph, with a context made from its declaration (tests,
 /// benchmarks and tools that drive systems by hand).
 void run_system(System& system, World& world);
+inline void run_system(System&& system, World& world) { run_system(system, world); }
 
 }  // namespace sph

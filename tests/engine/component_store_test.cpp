@@ -1,6 +1,6 @@
 #include <gtest/gtest.h>
 
-#include "engine/component_store.hpp"
+#include "engine/core/component_store.hpp"
 
 using namespace sph;
 

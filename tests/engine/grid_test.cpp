@@ -5,7 +5,7 @@
 #include <random>
 #include <set>
 
-#include "engine/grid.hpp"
+#include "engine/core/grid.hpp"
 
 using namespace sph;
 

@@ -11,9 +11,9 @@
 #include <regex>
 #include <sstream>
 
-#include "engine/components.hpp"
-#include "engine/io.hpp"
-#include "engine/simulation.hpp"
+#include "engine/data/components.hpp"
+#include "engine/run/io.hpp"
+#include "engine/run/simulation.hpp"
 #include "test_scenes.hpp"
 
 using namespace sph;
@@ -122,8 +122,8 @@ TEST(Vtu, DoubleAndByteColumnsRoundTripByteExact) {
         dt[i] = i < std::size(specials) ? specials[i] : 1e-4 * (1.0 + double(i) / 7.0);
         active[i] = std::uint8_t((i * 37 + 1) % 256);
     }
-    w.step.t_ticks = 433333333333;  // 0.433333333333 s: the frame time must keep every digit
-    w.step.t = to_seconds(w.step.t_ticks);
+    w.clock.t_ticks = 433333333333;  // 0.433333333333 s: the frame time must keep every digit
+    w.clock.t = to_seconds(w.clock.t_ticks);
     const auto dir = std::filesystem::temp_directory_path() / "sph_io_test_individual";
     std::filesystem::remove_all(dir);
     const auto file = dir / "frame.vtu";
@@ -142,7 +142,7 @@ TEST(Vtu, DoubleAndByteColumnsRoundTripByteExact) {
     const Real* px = reinterpret_cast<const Real*>(a.arrays.at("position").data());
     for (std::size_t i = 0; i < n; ++i)
         for (int c = 0; c < 3; ++c) ASSERT_EQ(px[3 * i + c], x[i][c]);
-    EXPECT_EQ(a.time, w.step.t);
+    EXPECT_EQ(a.time, w.clock.t);
     std::filesystem::remove_all(dir);
 }
 
@@ -362,8 +362,8 @@ TEST(Vtu, DtAndActiveWithoutColumnsAreTheGlobalStep) {
     s.output.attributes_explicit = true;
     World w;
     initialise_world(w, s);
-    w.step.step = 3;
-    w.step.set_dt(2.5e-4);
+    w.clock.step = 3;
+    w.step_size.set(2.5e-4);
     const auto dir = std::filesystem::temp_directory_path() / "sph_io_test_global_dt";
     std::filesystem::remove_all(dir);
     write_vtu(dir / "f.vtu", w, frame_attributes(w));
@@ -371,7 +371,7 @@ TEST(Vtu, DtAndActiveWithoutColumnsAreTheGlobalStep) {
     ASSERT_EQ(a.types.at("dt"), "Float64");
     const double* dt = reinterpret_cast<const double*>(a.arrays.at("dt").data());
     for (std::size_t i = 0; i < a.points; ++i) {
-        ASSERT_EQ(dt[i], w.step.dt);
+        ASSERT_EQ(dt[i], w.step_size.dt);
         ASSERT_EQ(a.arrays.at("active")[i], 1);
     }
     EXPECT_EQ(a.arrays.count("velocity"), 0u);  // not asked for

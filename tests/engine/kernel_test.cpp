@@ -5,7 +5,7 @@
 #include <numbers>
 #include <random>
 
-#include "engine/kernel.hpp"
+#include "engine/core/kernel.hpp"
 
 using namespace sph;
 

@@ -16,9 +16,9 @@
 
 #include <Eigen/Geometry>
 
-#include "engine/errors.hpp"
-#include "engine/motion.hpp"
-#include "engine/scene.hpp"
+#include "engine/core/errors.hpp"
+#include "engine/data/motion.hpp"
+#include "engine/data/scene.hpp"
 
 using namespace sph;
 

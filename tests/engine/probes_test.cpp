@@ -8,11 +8,11 @@
 #include <fstream>
 #include <sstream>
 
-#include "engine/components.hpp"
-#include "engine/errors.hpp"
-#include "engine/probes.hpp"
-#include "engine/recorder.hpp"
-#include "systems/methods/wcsph.hpp"
+#include "engine/data/components.hpp"
+#include "engine/core/errors.hpp"
+#include "engine/run/probes.hpp"
+#include "engine/run/recorder.hpp"
+#include "systems/methods/recipes.hpp"
 #include "test_scenes.hpp"
 
 using namespace sph;

@@ -8,8 +8,8 @@
 #include <fstream>
 #include <random>
 
-#include "engine/errors.hpp"
-#include "engine/sampling.hpp"
+#include "engine/core/errors.hpp"
+#include "engine/data/sampling.hpp"
 
 using namespace sph;
 

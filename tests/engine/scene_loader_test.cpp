@@ -11,10 +11,10 @@
 #include <string>
 #include <vector>
 
-#include "engine/errors.hpp"
-#include "engine/scene.hpp"
-#include "engine/components.hpp"
-#include "systems/methods/wcsph.hpp"
+#include "engine/core/errors.hpp"
+#include "engine/data/scene.hpp"
+#include "engine/data/components.hpp"
+#include "systems/methods/recipes.hpp"
 
 namespace sph {
 namespace {

@@ -5,8 +5,8 @@
 #include <cstdint>
 #include <string>
 
-#include "engine/errors.hpp"
-#include "engine/scene.hpp"
+#include "engine/core/errors.hpp"
+#include "engine/data/scene.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
     const std::string text(reinterpret_cast<const char*>(data), size);

@@ -9,7 +9,8 @@
 // on 2026-11-23: 4.1 mm = 0.41 r at t = 0.54 s (the impact on the far wall).
 #include <gtest/gtest.h>
 
-#include "engine/components.hpp"
+#include "engine/data/components.hpp"
+#include "systems/methods/recipes.hpp"
 #include "systems/methods/wcsph.hpp"
 
 using namespace sph;
@@ -24,7 +25,7 @@ TEST(DamBreak, ParticleBoundaryAloneHoldsForOneSecond) {
     const double r = scene.fluid.particle_radius;
     double max_err = 0, max_penetration = 0, t_penetration = 0;
     ASSERT_NO_THROW(sim.run_until(1.0, [&](const Simulation& s) {
-        max_err = std::max(max_err, s.world().step.rho_err_max);
+        max_err = std::max(max_err, s.world().stats.rho_err_max);
         for (const auto& p : s.world().fluid.store.get(comp::position))
             for (int a = 0; a < 3; ++a) {
                 const double pen = std::max(box.min[a] - double(p[a]), double(p[a]) - box.max[a]);

@@ -8,8 +8,8 @@
 
 #include <random>
 
-#include "engine/components.hpp"
-#include "engine/simulation.hpp"
+#include "engine/data/components.hpp"
+#include "engine/run/simulation.hpp"
 #include "systems/boundary/boundary_volume_system.hpp"
 #include "systems/density/density_kernels.hpp"
 #include "systems/density/density_system.hpp"
@@ -41,16 +41,16 @@ struct Fixture {
         }
         BoundaryVolumeSystem vol;
         vol.register_components(w);
-        vol.run(w);
+        run_system(vol, w);
         DensitySystem dens(true);
         ForcesSystem forces(true);
         dens.register_components(w);
         forces.register_components(w);
-        FluidGridSystem().run(w);
-        FluidNeighbourSystem().run(w);
-        BoundaryNeighbourSystem().run(w);
-        dens.run(w);
-        forces.run(w);
+        run_system(FluidGridSystem(), w);
+        run_system(FluidNeighbourSystem(), w);
+        run_system(BoundaryNeighbourSystem(), w);
+        run_system(dens, w);
+        run_system(forces, w);
     }
 };
 

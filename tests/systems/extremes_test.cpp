@@ -13,10 +13,10 @@
 #include <tbb/global_control.h>
 #include <unistd.h>
 
-#include "engine/components.hpp"
-#include "engine/errors.hpp"
+#include "engine/data/components.hpp"
+#include "engine/core/errors.hpp"
 #include "systems/debug/nan_injection_system.hpp"
-#include "systems/methods/wcsph.hpp"
+#include "systems/methods/recipes.hpp"
 #include "systems/timestep/global_dt_system.hpp"
 #include "test_scenes.hpp"
 
@@ -107,14 +107,14 @@ TEST(Extremes, HundredMetresPerSecondImpact) {
     std::uint64_t catches = 0;
     for (int k = 0; k < 400 && sim->time() < 0.004; ++k) {
         sim->step();
-        const double dt = w.step.dt_stable;
+        const double dt = w.step_size.dt_stable;
         if (k == 0) {
             EXPECT_LE(dt, lv * h / 100.0 * (1 + 1e-9));
             EXPECT_LE(dt, s.simulation.stepping.lambda_c * h / (1000.0 + 100.0) * (1 + 1e-9));
             flight_dt = dt;
         }
-        EXPECT_LE(dt, lv * h / w.step.v_max * (1 + 1e-6)) << "step " << k;
-        catches += w.step.collisions;
+        EXPECT_LE(dt, lv * h / w.stats.v_max * (1 + 1e-6)) << "step " << k;
+        catches += w.counter_value("collisions");
         for (const Vec3& p : w.fluid.store.get(comp::position)) {
             deepest = std::max(deepest, double(p.x()) - 0.4);
             if (p.x() > 0.4 - h) touched = true;
@@ -181,11 +181,11 @@ TEST(Extremes, SingleParticleGlobalStepping) {
     const Vec3 v = w.fluid.store.get(comp::velocity)[0];
     EXPECT_NEAR(v.y(), -9.81 * sim->time(), 1e-4);  // float sums over ~100 steps
     // The last step was sized from the state at its start: a = g, v = v_end - g dt.
-    EXPECT_NEAR(w.step.a_max, 9.81, 1e-5);
-    EXPECT_NEAR(w.step.v_max, std::abs(v.y()) - 9.81 * w.step.dt, 1e-5);
+    EXPECT_NEAR(w.stats.a_max, 9.81, 1e-5);
+    EXPECT_NEAR(w.stats.v_max, std::abs(v.y()) - 9.81 * w.step_size.dt, 1e-5);
     const double expect =
-        global_time_step(s.simulation.stepping, w.physics.h, w.physics.speed_of_sound, w.step.v_max, w.step.a_max);
-    EXPECT_NEAR(w.step.dt_stable, expect, 1e-9 * expect);
+        global_time_step(s.simulation.stepping, w.physics.h, w.physics.speed_of_sound, w.stats.v_max, w.stats.a_max);
+    EXPECT_NEAR(w.step_size.dt_stable, expect, 1e-9 * expect);
     EXPECT_GT(sim->steps(), 10);
 }
 
@@ -260,14 +260,14 @@ TEST(Extremes, CollapsingStepStopsWithDiagnosis) {
     auto sim = make_simulation(s);
     try {
         sim->run_until(0.004);
-        FAIL() << "the run did not stop; smallest step " << sim->world().step.dt_stable;
+        FAIL() << "the run did not stop; smallest step " << sim->world().step_size.dt_stable;
     } catch (const SimulationError& e) {
         EXPECT_GT(e.step(), 10) << e.what();
         EXPECT_EQ(e.system(), "global_dt");
         const std::string what = e.what();
         EXPECT_NE(what.find("time step collapsed at step " + std::to_string(e.step())), std::string::npos) << what;
         EXPECT_NE(what.find("is below dt_min = 1e-05 s"), std::string::npos) << what;
-        EXPECT_LT(sim->world().step.dt_stable, 1e-5);
+        EXPECT_LT(sim->world().step_size.dt_stable, 1e-5);
     }
 }
 
@@ -336,7 +336,7 @@ TEST(Extremes, MillionStepsOfATinyScene) {
             e_max = std::max(e_max, e);
             if (k > 100'000) e_max_late = std::max(e_max_late, e);
             if (k > 900'000) {
-                v_late = std::max(v_late, w.step.v_max);
+                v_late = std::max(v_late, w.stats.v_max);
                 e_sum_last += e;
             }
         }

@@ -4,8 +4,8 @@
 
 #include <limits>
 
-#include "engine/components.hpp"
-#include "systems/methods/wcsph.hpp"
+#include "engine/data/components.hpp"
+#include "systems/methods/recipes.hpp"
 
 using namespace sph;
 

@@ -10,8 +10,8 @@
 #include <Eigen/Eigenvalues>
 #include <random>
 
-#include "engine/components.hpp"
-#include "engine/simulation.hpp"
+#include "engine/data/components.hpp"
+#include "engine/run/simulation.hpp"
 #include "systems/boundary/boundary_volume_system.hpp"
 #include "systems/density/density_system.hpp"
 #include "systems/forces/forces_kernels.hpp"
@@ -57,7 +57,7 @@ struct Fixture {
         systems.push_back(std::make_unique<GradientCorrectionSystem>(with_boundary, false));
         systems.push_back(std::make_unique<ForcesSystem>(with_boundary, false, false, true));
         for (auto& sys : systems) sys->register_components(w);
-        for (auto& sys : systems) sys->run(w);
+        for (auto& sys : systems) run_system(*sys, w);
     }
 };
 

@@ -33,10 +33,10 @@
 #include <cmath>
 #include <numeric>
 
-#include "engine/components.hpp"
-#include "engine/errors.hpp"
-#include "engine/probes.hpp"
-#include "systems/methods/wcsph.hpp"
+#include "engine/data/components.hpp"
+#include "engine/core/errors.hpp"
+#include "engine/run/probes.hpp"
+#include "systems/methods/recipes.hpp"
 
 using namespace sph;
 
@@ -87,7 +87,7 @@ TEST_P(HydrostaticTank, PressureMatchesRhoGDepth) {
     double late_rho_err_max = 0;
     sim->run_until(end, [&](const Simulation& s) {
         probes.sample_due(s.world());
-        if (s.time() >= t0) late_rho_err_max = std::max(late_rho_err_max, s.world().step.rho_err_max);
+        if (s.time() >= t0) late_rho_err_max = std::max(late_rho_err_max, s.world().stats.rho_err_max);
     });
     const double rho0 = scene.fluid.rest_density, g = 9.81;
     // The free surface is flat at rest: its level is the mean of the five height lines (the

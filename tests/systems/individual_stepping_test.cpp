@@ -7,7 +7,8 @@
 #include <cstdio>
 #include <vector>
 
-#include "engine/components.hpp"
+#include "engine/data/components.hpp"
+#include "systems/methods/recipes.hpp"
 #include "systems/methods/wcsph.hpp"
 #include "test_scenes.hpp"
 
@@ -42,8 +43,8 @@ TEST(IndividualStepping, EqualStepsReproduceGlobal) {
     for (int s = 0; s < 200; ++s) {
         global->step();
         indiv->step();
-        ASSERT_EQ(indiv->world().step.active, n) << "step " << s << ": not every particle was held to one step";
-        ASSERT_EQ(indiv->world().step.dt_ticks, global->world().step.dt_ticks) << "step " << s;
+        ASSERT_EQ(indiv->world().counter_value("active"), n) << "step " << s << ": not every particle was held to one step";
+        ASSERT_EQ(indiv->world().step_size.dt_ticks, global->world().step_size.dt_ticks) << "step " << s;
     }
     const auto xg = global->world().fluid.store.get(comp::position), xi = indiv->world().fluid.store.get(comp::position);
     const auto vg = global->world().fluid.store.get(comp::velocity), vi = indiv->world().fluid.store.get(comp::velocity);
@@ -76,13 +77,14 @@ TEST(IndividualStepping, WorkCountersAreTheActiveSet) {
     double active_sum = 0;
     int steps = 0;
     sim->run_until(0.3, [&](const Simulation& sm) {
-        const StepState& st = sm.world().step;
-        ASSERT_EQ(st.neighbour_searches, st.active);
-        ASSERT_EQ(st.force_evaluations, st.active);
-        ASSERT_EQ(sm.world().active_set.size(), st.active);
-        ASSERT_GE(st.propagation_updates, st.active);
-        ASSERT_LE(st.propagation_updates, n);
-        active_sum += double(st.active) / double(n);
+        const World& sw = sm.world();
+        const std::uint64_t active = sw.counter_value("active");
+        ASSERT_EQ(sw.counter_value("neighbour_searches"), active);
+        ASSERT_EQ(sw.counter_value("force_evaluations"), active);
+        ASSERT_EQ(sw.active_set.size(), active);
+        ASSERT_GE(sw.counter_value("propagation_updates"), active);
+        ASSERT_LE(sw.counter_value("propagation_updates"), n);
+        active_sum += double(active) / double(n);
         ++steps;
     });
     std::printf("resting pool, %d steps, average active fraction %.3f\n", steps, active_sum / steps);
@@ -119,7 +121,7 @@ TEST(IndividualStepping, SlabWakesSleepingPool) {
             const auto x = w.fluid.store.get(comp::position);
             const auto id = w.fluid.store.get(comp::id);
             const double t = sm.time();
-            r.max_err = std::max(r.max_err, w.step.rho_err_max);
+            r.max_err = std::max(r.max_err, w.stats.rho_err_max);
             for (std::size_t i = 0; i < x.size(); ++i) {
                 for (int a = 0; a < 3; ++a)
                     r.penetration = std::max({r.penetration, box.min[a] - x[i][a], x[i][a] - box.max[a]});
@@ -186,7 +188,7 @@ HoldMeasure measure_holds(Activation rule) {
         const auto t_last = w.fluid.store.get(comp::t_last);
         const auto dt = w.fluid.store.get(comp::dt);
         const auto active = w.fluid.store.get(comp::active);
-        const Tick t_end = w.step.t_ticks;  // the step has been taken
+        const Tick t_end = w.clock.t_ticks;  // the step has been taken
         if (m.steps++ > 0)
             for (std::size_t i = 0; i < n; ++i) {
                 if (active[i] || dt[i] != dt_before[i]) continue;

@@ -14,10 +14,11 @@
 #include <random>
 #include <set>
 
-#include "engine/components.hpp"
-#include "engine/simulation.hpp"
+#include "engine/data/components.hpp"
+#include "engine/run/simulation.hpp"
 #include "systems/density/density_kernels.hpp"
 #include "systems/forces/forces_kernels.hpp"
+#include "systems/methods/recipes.hpp"
 #include "systems/methods/wcsph.hpp"
 #include "systems/timestep/global_dt_system.hpp"
 #include "test_scenes.hpp"
@@ -42,7 +43,7 @@ struct Harness {
         recipe = make_wcsph_recipe(s);
         for (auto& sys : recipe.setup) sys->register_components(w);
         for (auto& sys : recipe.step) sys->register_components(w), by_name[sys->name()] = sys.get();
-        for (auto& sys : recipe.setup) sys->run(w);
+        for (auto& sys : recipe.setup) run_system(*sys, w);
         std::mt19937 rng(seed);
         std::uniform_real_distribution<Real> u(-1, 1);
         auto x = w.fluid.store.get(comp::position);
@@ -55,10 +56,10 @@ struct Harness {
     }
     void run(const std::string& name) {
         ASSERT_TRUE(by_name.count(name)) << name;
-        by_name[name]->run(w);
+        run_system(*by_name[name], w);
     }
     void run_all() {
-        for (auto& sys : recipe.step) sys->run(w);
+        for (auto& sys : recipe.step) run_system(*sys, w);
     }
 };
 
@@ -82,12 +83,12 @@ void check_fraction(double fraction) {
     const std::size_t n = w.fluid.size();
     ASSERT_GT(n, 300u);
     // Step 0: every particle is due (t_last = 0, dt = 0), so all get lists and forces.
-    w.step.set_dt(1e-4);
+    w.step_size.set(1e-4);
     H.run_all();
-    ASSERT_EQ(w.step.active, n);
-    w.step.t_ticks += w.step.dt_ticks;
-    w.step.t = to_seconds(w.step.t_ticks);
-    ++w.step.step;
+    ASSERT_EQ(w.counter_value("active"), n);
+    w.clock.t_ticks += w.step_size.dt_ticks;
+    w.clock.t = to_seconds(w.clock.t_ticks);
+    ++w.clock.step;
 
     // Make a chosen subset due now: dt_i = t for them (tie: active), 10 t for the others.
     std::mt19937 rng(3);
@@ -98,7 +99,7 @@ void check_fraction(double fraction) {
     std::vector<std::uint8_t> want(n, 0);
     for (std::size_t k = 0; k < n_active; ++k) want[perm[k]] = 1;
     auto dt = w.fluid.store.get(comp::dt);
-    for (Index i = 0; i < n; ++i) dt[i] = want[i] ? w.step.t : 10 * w.step.t;
+    for (Index i = 0; i < n; ++i) dt[i] = want[i] ? w.clock.t : 10 * w.clock.t;
     auto v = w.fluid.store.get(comp::velocity);
     for (Index i = 0; i < n; ++i) v[i] += Vec3(0.1f, -0.2f, 0.05f);  // so v differs from the base state
 
@@ -131,7 +132,7 @@ void check_fraction(double fraction) {
             EXPECT_TRUE(std::ranges::equal(w.boundary_neighbours.of(i), bl_before.of(i))) << "particle " << i;
         }
     }
-    EXPECT_EQ(w.step.neighbour_searches, n_active);
+    EXPECT_EQ(w.counter_value("neighbour_searches"), n_active);
 
     // --- halo: the inactive particles within h of an active one (brute force), as a set.
     H.run("halo");
@@ -140,7 +141,7 @@ void check_fraction(double fraction) {
         for (Index j : brute_neighbours(x, x, i, h, true))
             if (!want[j]) halo_ref.insert(j);
     EXPECT_EQ(sorted(w.halo_set), std::vector<Index>(halo_ref.begin(), halo_ref.end()));
-    EXPECT_EQ(w.step.boundary_contributions, boundary_entries);
+    EXPECT_EQ(w.counter_value("boundary_contributions"), boundary_entries);
 
     // --- density: active ones equal the O(N^2) sum (1e-5 relative: float sums of ~60 terms);
     // the others keep their values exactly (they carry the interpolated density).
@@ -180,7 +181,7 @@ void check_fraction(double fraction) {
             EXPECT_EQ(t_last[i], 0) << "particle " << i;
             continue;
         }
-        EXPECT_EQ(t_last[i], w.step.t_ticks);
+        EXPECT_EQ(t_last[i], w.clock.t_ticks);
         Vec3d a = ph.gravity.cast<double>();
         double d = 0;
         const double pi = p[i] / (double(rho[i]) * rho[i]);
@@ -209,7 +210,7 @@ void check_fraction(double fraction) {
         const double raw = global_time_step(w.scene.simulation.stepping, h, ph.speed_of_sound, v[i].norm(), acc[i].norm());
         EXPECT_NEAR(dt_raw[i], raw, 1e-5 * raw) << "particle " << i;
     }
-    EXPECT_EQ(w.step.force_evaluations, n_active);
+    EXPECT_EQ(w.counter_value("force_evaluations"), n_active);
 
     // --- dt propagation (line 16), exact (a minimum of stored values): for the active and the
     // halo, the minimum of dt_raw over itself, its list, and the active particles that have it
@@ -227,23 +228,23 @@ void check_fraction(double fraction) {
             if ((x[a] - x[i]).squaredNorm() < h * h && a != i) m = std::min(m, dt_raw[a]);
         EXPECT_EQ(dt[i], m) << "particle " << i;
     }
-    EXPECT_EQ(w.step.propagation_updates, n_active + halo_ref.size());
+    EXPECT_EQ(w.counter_value("propagation_updates"), n_active + halo_ref.size());
 
     // --- global dt (line 17): the minimum over all particles, in whole ticks. Under the
     // `deadline` activation rule (select_active_system.hpp) the step also stops at the earliest
     // deadline t_last + Delta t_i of an inactive particle still ahead, but never below the
     // last stable step; recomputed here by a plain loop.
-    const Tick floor_ticks = std::max<Tick>(1, to_ticks(w.step.dt_stable));
+    const Tick floor_ticks = std::max<Tick>(1, to_ticks(w.step_size.dt_stable));
     Tick next = std::numeric_limits<Tick>::max();
     for (Index i = 0; i < n; ++i) {
         const Tick due = t_last[i] + to_ticks(dt[i]);
-        if (!active[i] && due > w.step.t_ticks) next = std::min(next, due);
+        if (!active[i] && due > w.clock.t_ticks) next = std::min(next, due);
     }
-    H.run("global_dt");
+    H.run("individual_dt");
     const double dt_min = std::min(*std::min_element(dt.begin(), dt.end()), w.scene.simulation.stepping.dt_max);
     Tick expected = to_ticks(dt_min);
-    if (next != std::numeric_limits<Tick>::max()) expected = std::min(expected, std::max(next - w.step.t_ticks, floor_ticks));
-    EXPECT_EQ(w.step.dt_ticks, expected);
+    if (next != std::numeric_limits<Tick>::max()) expected = std::min(expected, std::max(next - w.clock.t_ticks, floor_ticks));
+    EXPECT_EQ(w.step_size.dt_ticks, expected);
     // With none active the step is set by the sleeping particles alone: the cap must bind there.
     if (fraction == 0.0) {
         EXPECT_LT(expected, to_ticks(dt_min)) << "the deadline cap is not exercised";
@@ -259,7 +260,7 @@ void check_fraction(double fraction) {
     const std::vector<Real> rho_last(w.fluid.store.get(comp::density_last).begin(),
                                      w.fluid.store.get(comp::density_last).end());
     H.run("async_integrate");
-    const Tick t_end = w.step.t_ticks + w.step.dt_ticks;
+    const Tick t_end = w.clock.t_ticks + w.step_size.dt_ticks;
     for (Index i = 0; i < n; ++i) {
         const Vec3d bx = (want[i] ? x_prev[i] : x0_prev[i]).cast<double>();
         const Vec3d bv = (want[i] ? v_prev[i] : v0_prev[i]).cast<double>();

@@ -3,8 +3,8 @@
 // conserved up to float round-off. Tolerance: relative 1e-5 of sum_i m |v_i| (issue figure).
 #include <gtest/gtest.h>
 
-#include "engine/components.hpp"
-#include "systems/methods/wcsph.hpp"
+#include "engine/data/components.hpp"
+#include "systems/methods/recipes.hpp"
 
 using namespace sph;
 
@@ -36,7 +36,7 @@ TEST(Momentum, TwoBlobsCollidingConserveMomentum) {
     double scale = 0;
     const Vec3d p0 = momentum(*sim, &scale);
     double max_rho_err = 0;
-    sim->run_until(0.12, [&](const Simulation& sm) { max_rho_err = std::max(max_rho_err, sm.world().step.rho_err_max); });
+    sim->run_until(0.12, [&](const Simulation& sm) { max_rho_err = std::max(max_rho_err, sm.world().stats.rho_err_max); });
     const Vec3d p1 = momentum(*sim);
     // The blobs did collide: densities rose above rest by a visible amount.
     EXPECT_GT(max_rho_err, 1e-3);

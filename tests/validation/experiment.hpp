@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
-#include "engine/probes.hpp"
-#include "systems/methods/wcsph.hpp"
+#include "engine/run/probes.hpp"
+#include "systems/methods/recipes.hpp"
 
 namespace sph::test {
 

@@ -42,7 +42,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "engine/errors.hpp"
+#include "engine/core/errors.hpp"
 #include "validation/experiment.hpp"
 
 using namespace sph;

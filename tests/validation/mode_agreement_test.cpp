@@ -21,7 +21,7 @@
 #include <cmath>
 #include <limits>
 
-#include "engine/errors.hpp"
+#include "engine/core/errors.hpp"
 #include "validation/experiment.hpp"
 
 using namespace sph;
@@ -47,7 +47,7 @@ ModeRun run_scene(std::vector<std::pair<std::string, nlohmann::json>> overrides)
     r.probes.sample_due(sim->world());
     sim->run_until(kEnd, [&](const Simulation& s) {
         r.probes.sample_due(s.world());
-        if (s.time() < kEnd - 1e-9) r.min_dt = std::min(r.min_dt, s.world().step.dt_stable);
+        if (s.time() < kEnd - 1e-9) r.min_dt = std::min(r.min_dt, s.world().step_size.dt_stable);
     });
     r.steps = sim->steps();
     return r;

@@ -1,9 +1,9 @@
 // Builds a scene in code, steps it, reads components and writes a frame.
 #include <cstdio>
 
-#include "engine/components.hpp"
-#include "engine/io.hpp"
-#include "systems/methods/wcsph.hpp"
+#include "engine/data/components.hpp"
+#include "engine/run/io.hpp"
+#include "systems/methods/recipes.hpp"
 
 int main() {
     sph::Scene scene;

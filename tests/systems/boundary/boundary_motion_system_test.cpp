@@ -8,8 +8,8 @@
 #include <algorithm>
 #include <vector>
 
-#include "engine/components.hpp"
-#include "systems/methods/wcsph.hpp"
+#include "engine/data/components.hpp"
+#include "systems/methods/recipes.hpp"
 #include "test_scenes.hpp"
 
 using namespace sph;
@@ -112,7 +112,7 @@ TEST(BoundaryMotion, StaticSceneHasNoMotionMachinery) {
     auto sim = make_simulation(scene);
     for (const auto& s : sim->graph().systems()) {
         EXPECT_NE(s->name(), "boundary_motion");
-        for (const auto& r : s->access().reads) EXPECT_NE(r, res::boundary(comp::velocity.name)) << s->name();
+        EXPECT_FALSE(s->access().may_read(key_of(boundary(comp::velocity)))) << s->name();
     }
     const auto names = sim->world().boundary.store.names();
     EXPECT_EQ(names, (std::vector<std::string>{"normal", "position", "volume"}));

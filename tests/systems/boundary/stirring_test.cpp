@@ -11,7 +11,8 @@
 
 #include <cmath>
 
-#include "engine/components.hpp"
+#include "engine/data/components.hpp"
+#include "systems/methods/recipes.hpp"
 #include "systems/methods/wcsph.hpp"
 
 using namespace sph;
@@ -85,8 +86,8 @@ Result run(SteppingMode mode) {
             const double depth = std::min((p - lo).minCoeff(), (hi - p).minCoeff());
             if (depth > r.penetration) r.penetration = depth, r.t_penetration = s.time();
         }
-        r.max_err = std::max(r.max_err, w.step.rho_err_max);
-        r.active += double(w.step.active) / double(n);
+        r.max_err = std::max(r.max_err, w.stats.rho_err_max);
+        r.active += double(w.counter_value("active")) / double(n);
     });
     const World& w = sim.world();
     for (const Vec3& v : w.fluid.store.get(comp::velocity)) r.momentum += double(w.physics.mass) * v.x();

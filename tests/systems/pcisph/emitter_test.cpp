@@ -4,8 +4,8 @@
 // exceed rate x time (+ one layer's rounding: the budget is whole particles) nor max_particles.
 #include <gtest/gtest.h>
 
-#include "engine/components.hpp"
-#include "systems/methods/wcsph.hpp"
+#include "engine/data/components.hpp"
+#include "systems/methods/recipes.hpp"
 
 using namespace sph;
 
@@ -29,7 +29,7 @@ TEST(Emitter, NeverInsertsInsideParticlesOrBoundaries) {
         const auto xb = w.boundary.store.get(comp::position);
         EXPECT_LE(double(x.size()), 2000.0 * s.time() + 25.0);  // rate x t, plus at most one disc
         EXPECT_LE(x.size(), 500u);
-        if (!w.step.rolled_back) {
+        if (!s.last().rolled_back) {
             // Where each new particle was inserted: on the disc (y = 0.25) at the lattice point
             // its (x, z) rounds to (it moved less than r0/2 sideways in one step).
             std::vector<Vec3> inserted;

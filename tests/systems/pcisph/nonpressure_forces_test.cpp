@@ -6,9 +6,9 @@
 
 #include <random>
 
-#include "engine/components.hpp"
+#include "engine/data/components.hpp"
 #include "systems/forces/nonpressure_forces_system.hpp"
-#include "systems/methods/wcsph.hpp"
+#include "systems/methods/recipes.hpp"
 #include "systems/neighbours/neighbour_search_system.hpp"
 #include "test_scenes.hpp"
 
@@ -30,11 +30,11 @@ TEST(NonpressureForces, EqualsBruteForce) {
         x[i] += Vec3(u(rng), u(rng), u(rng)) * Real(0.003);
         v[i] = Vec3(u(rng), u(rng), u(rng));
     }
-    FluidGridSystem().run(w);
-    FluidNeighbourSystem().run(w);
-    BoundaryNeighbourSystem().run(w);
-    NonpressureForcesSystem sys(true, false);
-    sys.run(w);
+    run_system(FluidGridSystem(), w);
+    run_system(FluidNeighbourSystem(), w);
+    run_system(BoundaryNeighbourSystem(), w);
+    NonpressureForcesSystem sys(true, false, s.fluid.surface_tension);
+    run_system(sys, w);
     const auto a = w.fluid.store.get(comp::nonpressure_acceleration);
     const auto xb = w.boundary.store.get(comp::position);
     const auto vol = w.boundary.store.get(comp::volume);

@@ -15,8 +15,8 @@
 #include <cstdio>
 #include <vector>
 
-#include "engine/components.hpp"
-#include "systems/methods/wcsph.hpp"
+#include "engine/data/components.hpp"
+#include "systems/methods/recipes.hpp"
 
 using namespace sph;
 

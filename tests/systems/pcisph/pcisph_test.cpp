@@ -7,10 +7,11 @@
 #include <cstring>
 #include <numbers>
 
-#include "engine/components.hpp"
-#include "engine/errors.hpp"
-#include "systems/methods/wcsph.hpp"
+#include "engine/data/components.hpp"
+#include "engine/core/errors.hpp"
+#include "systems/methods/recipes.hpp"
 #include "systems/pcisph/pcisph_kernels.hpp"
+#include "systems/pcisph/pcisph_state.hpp"
 #include "systems/timestep/adaptive_controller.hpp"
 #include "test_scenes.hpp"
 
@@ -66,9 +67,9 @@ TEST(PcisphPrototype, DeltaEqualsAnalyticPrototypeSum) {
     int changes = 0;
     for (int k = 0; k < 20; ++k) {
         sim->step();
-        const double dt = w.pcisph.delta_dt;
-        EXPECT_EQ(dt, w.step.dt);
-        EXPECT_NEAR(w.pcisph.delta / expected_delta(dt), 1.0, 1e-5) << "step " << k;
+        const double dt = w.resources.get<PcisphDelta>(res::pcisph_delta.name).delta_dt;
+        EXPECT_EQ(dt, w.step_size.dt);
+        EXPECT_NEAR(w.resources.get<PcisphDelta>(res::pcisph_delta.name).delta / expected_delta(dt), 1.0, 1e-5) << "step " << k;
         if (k == 0) first_dt = dt;
         if (dt != first_dt) ++changes;
     }
@@ -111,12 +112,12 @@ TEST(PcisphCompression, CompressedBlockReachesEta) {
     const double before = brute_max_err();
     ASSERT_GT(before, 0.025);  // the set-up is compressed by ~3 %
     sim->step();
-    EXPECT_LT(w.pcisph.iterations, 200) << "the loop did not converge";
-    EXPECT_LE(w.pcisph.pred_err_max, 0.005);
+    EXPECT_LT(w.resources.get<PcisphErrors>(res::pcisph_errors.name).iterations, 200) << "the loop did not converge";
+    EXPECT_LE(w.resources.get<PcisphErrors>(res::pcisph_errors.name).pred_err_max, 0.005);
     const double after = brute_max_err();
     std::printf("compression: max rho_err %.4f before, %.5f after %d iterations (predicted %.5f)\n", before, after,
-                w.pcisph.iterations, w.pcisph.pred_err_max);
-    EXPECT_LE(after, 0.005) << "before " << before << ", iterations " << w.pcisph.iterations;
+                w.resources.get<PcisphErrors>(res::pcisph_errors.name).iterations, w.resources.get<PcisphErrors>(res::pcisph_errors.name).pred_err_max);
+    EXPECT_LE(after, 0.005) << "before " << before << ", iterations " << w.resources.get<PcisphErrors>(res::pcisph_errors.name).iterations;
 }
 
 // A slab of fluid fired at 20 m/s into a container wall (no gravity). With the Ihmsen boundary
@@ -135,7 +136,7 @@ TEST(PcisphPenetration, FastSlabNeverEndsInsideTheWall) {
         std::uint64_t net = 0;
         sim->run_until(0.03, [&](const Simulation& sm) {
             for (const auto& p : sm.world().fluid.store.get(comp::position)) deepest = std::max(deepest, double(p.x()) - 0.5);
-            net += sm.world().step.collisions;
+            net += sm.world().counter_value("collisions");
         });
         SCOPED_TRACE(to_string(mode));
         std::printf("penetration (%s): deepest centre %.4f m from the wall surface, %lld steps\n", to_string(mode),
@@ -161,7 +162,7 @@ TEST(PcisphBoundary, RestDensityOnFlatWall) {
     const auto xb = w.boundary.store.get(comp::position);
     const auto rho = w.boundary.store.get(comp::density);
     int checked = 0;
-    for (Index b : w.boundary_active.set) {
+    for (Index b : w.resources.get<BoundaryActive>(res::boundary_active.name).set) {
         const Vec3 p = xb[b];
         if (p.y() > 0 || p.x() < 0.1 || p.x() > 0.2 || p.z() < 0.1 || p.z() > 0.2) continue;
         EXPECT_NEAR(rho[b] / w.physics.rest_density, 1.0, 0.03) << "boundary particle at " << p.transpose();
@@ -180,7 +181,7 @@ TEST(PcisphShock, RollbackRestoresStateBitForBitAndResumesWithEq24) {
     auto sim = make_simulation(s);
     World& w = sim->world();
     for (int k = 0; k < 5; ++k) sim->step();
-    ASSERT_EQ(w.step.shocks, 0u);
+    ASSERT_EQ(w.clock.rollbacks, 0u);
     // Copy of every column at the start of the step before the shock step.
     auto copy = [](const ComponentStore& st) {
         ComponentStore::Snapshot snap;
@@ -189,16 +190,16 @@ TEST(PcisphShock, RollbackRestoresStateBitForBitAndResumesWithEq24) {
     };
     const auto fluid_before = copy(w.fluid.store);
     const auto boundary_before = copy(w.boundary.store);
-    const Tick t_before = w.step.t_ticks;
+    const Tick t_before = w.clock.t_ticks;
     sim->step();  // kept
-    const double dt_kept = w.step.dt;
+    const double dt_kept = w.step_size.dt;
     // Forced shock: one particle at 0.5 h / dt (eq. 27 needs > 0.45 h / dt).
     w.fluid.store.get(comp::velocity)[0] = Vec3(Real(0.5 * w.physics.h / dt_kept), 0, 0);
     sim->step();
-    ASSERT_EQ(w.step.shocks, 1u);
-    EXPECT_TRUE(w.step.rolled_back);
-    EXPECT_EQ(w.step.t_ticks, t_before);
-    const double v = w.step.v_max, f = w.step.a_max;  // the shock step's statistics
+    ASSERT_EQ(w.clock.rollbacks, 1u);
+    EXPECT_TRUE(sim->last().rolled_back);
+    EXPECT_EQ(w.clock.t_ticks, t_before);
+    const double v = w.stats.v_max, f = w.stats.a_max;  // the shock step's statistics
     const double eq24 = std::min({0.2 * std::sqrt(w.physics.h / f), 0.25 * w.physics.h / v, s.simulation.stepping.dt_max});
     {  // the same columns, the same sizes
         ComponentStore::Snapshot now;
@@ -234,9 +235,9 @@ TEST(PcisphShock, RollbackRestoresStateBitForBitAndResumesWithEq24) {
     eq_vec(w.boundary.store.get(comp::position), boundary_before, "position");
     // Resumes with eq. 24.
     sim->step();
-    EXPECT_FALSE(w.step.rolled_back);
-    EXPECT_EQ(w.step.dt, to_seconds(to_ticks(eq24))) << "eq. 24 gives " << eq24;
-    EXPECT_LT(w.step.dt, dt_kept);
+    EXPECT_FALSE(sim->last().rolled_back);
+    EXPECT_EQ(w.step_size.dt, to_seconds(to_ticks(eq24))) << "eq. 24 gives " << eq24;
+    EXPECT_LT(w.step_size.dt, dt_kept);
 }
 
 // A shock whose eq. 24 step is below dt_min stops the run with a SimulationError naming the
@@ -246,7 +247,7 @@ TEST(PcisphShock, ResumeBelowDtMinStopsTheRun) {
     auto sim = make_simulation(s);
     World& w = sim->world();
     for (int k = 0; k < 3; ++k) sim->step();
-    const double dt = w.step.dt;
+    const double dt = w.step_size.dt;
     w.scene.simulation.stepping.dt_min = 0.9 * dt;  // eq. 24 gives 0.25 h / v = 0.5 dt below
     w.fluid.store.get(comp::velocity)[0] = Vec3(Real(0.5 * w.physics.h / dt), 0, 0);
     try {
