@@ -46,9 +46,9 @@ stage "3/4 ThreadSanitizer: graph and system tests, against a TSan-instrumented 
 # threads; tools/install_tsan_tbb.sh builds Debian's own oneTBB 2021.8.0 source with
 # -fsanitize=thread (cached in build-tbb-tsan/, about 35 s).
 tbb_dir=$(bash tools/install_tsan_tbb.sh)
-tsan_targets=(system_graph_test individual_systems_test density_forces_bruteforce_test boundary_motion_system_test
-              grid_test checkpoint_test extremes_test emitter_test pcisph_test nonpressure_forces_test
-              gradient_correction_test)
+tsan_targets=(system_graph_test individual_systems_test forces_system_test boundary_motion_system_test
+              grid_test checkpoint_test extremes_test emitter_system_test pcisph_test nonpressure_forces_system_test
+              gradient_correction_system_test)
 cmake -S . -B build-tsan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g" \
   -DSPH_SANITIZE=thread -DSPH_BUILD_TESTS=ON -DSPH_BUILD_BENCH=OFF -DTBB_DIR="$tbb_dir" >/dev/null
 cmake --build build-tsan -j"$jobs" --target "${tsan_targets[@]}"

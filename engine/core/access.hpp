@@ -66,7 +66,7 @@ inline std::string key_of(const Counter& c) { return "counter." + std::string(c.
 /// @brief What a system reads and writes, built from typed handles:
 ///   Access().read(fluid(comp::position), res::fluid_neighbours).write(fluid(comp::density))
 /// A write implies a read. `resizes(set)` declares that the system changes the set's size
-/// (an emitter), which reallocates every column of it: the graph orders it against every
+/// (inserting particles), which reallocates every column of it: the graph orders it against every
 /// system that touches the set.
 class Access {
 public:

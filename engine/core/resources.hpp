@@ -1,7 +1,7 @@
 #pragma once
 /// @file resources.hpp
-/// @brief Resources owned by systems (a method's state that is not a particle column: PCISPH's
-/// delta and controller, the emitters' progress), stored by name with their type. The engine
+/// @brief Resources owned by systems (a method's state that is not a particle column: a solver's
+/// coefficients and controller, a source's progress), stored by name with their type. The engine
 /// copies the `Kept` ones generically: into rollback snapshots and into checkpoints (as bytes),
 /// without knowing what they hold. `Scratch` ones are rebuilt every step and never copied.
 #include <cstring>

@@ -1,6 +1,6 @@
 #pragma once
 /// @file components.hpp
-/// @brief The particle attributes the engine knows. A method registers only those it uses.
+/// @brief The particle attributes shared by the methods. A method registers only those it uses.
 #include <cstdint>
 
 #include "engine/core/component_store.hpp"
@@ -33,15 +33,7 @@ inline constexpr Component<Real> density_last{"density_last"};
 // kernel-gradient moment matrix M_i = -sum_j V_j grad W_ij (x_ij)^T, eigenvalues clamped.
 inline constexpr Component<Mat3> gradient_correction{"gradient_correction"};
 
-// PCISPH (Solenthaler & Pajarola 2009; Ihmsen et al. 2010 Alg. 2).
-inline constexpr Component<Vec3> predicted_position{"predicted_position"};  ///< x*(t + dt)
-inline constexpr Component<Vec3> pressure_acceleration{"pressure_acceleration"};  ///< F^p / m, eq. 6
-/// Viscosity and surface tension per unit mass (only when the scene asks for them).
-inline constexpr Component<Vec3> nonpressure_acceleration{"nonpressure_acceleration"};
-/// Boundary: m_b = rho0 V_b (eq. 13 with Akinci's volume) and the constant boundary part of
-/// its own density, sum_b' m_b' W_bb'.
-inline constexpr Component<Real> mass{"mass"};
-inline constexpr Component<Real> self_density{"self_density"};
+// A method's own columns are declared beside its systems (systems/<method>/).
 
 // Boundary particles (Akinci et al. 2012).
 inline constexpr Component<Real> volume{"volume"};  ///< V_b = 1 / sum_k W_bk (Akinci eq. 4)

@@ -54,8 +54,9 @@ struct Clock {
     std::uint64_t rollbacks = 0;  ///< steps discarded by a rollback so far (kept through rollbacks)
 };
 
-/// @brief The step being taken (res::dt): written by the one system of each recipe that owns
-/// the step (constant_dt, global_dt, individual_dt, pcisph_dt), read by the integrators.
+/// @brief The step being taken (res::dt): written by the step-size system(s) of each recipe
+/// (the last writer in recipe order owns it and is named when it collapses), read by the
+/// integrators.
 struct StepSize {
     Tick dt_ticks = 0;      ///< the step being taken
     double dt = 0;          ///< = to_seconds(dt_ticks)

@@ -14,11 +14,11 @@
 namespace sph {
 
 std::vector<Edge> derive_edges(const std::vector<Access>& declared) {
-    // A system that resizes a set (an emitter) reallocates every column of it, so it writes the
-    // set's size and every access to one of the set's resources reads it: the resize is ordered
-    // after the systems before it in the recipe and before those after it. Without this, an
-    // emitter and a system sharing no declared column (pcisph_reset zeroing
-    // pressure_acceleration) ran concurrently while the column was reallocated.
+    // A system that resizes a set reallocates every column of it, so it writes the set's size
+    // and every access to one of the set's resources reads it: the resize is ordered after the
+    // systems before it in the recipe and before those after it. Without this, a resizing
+    // system and one sharing no declared column with it (one that only zeroes a column) ran
+    // concurrently while the column was reallocated.
     struct Plain {
         std::vector<std::string> reads, writes;
     };

@@ -236,7 +236,7 @@ nlohmann::json Recorder::finish(const Simulation& sim, double wall_seconds, int 
     j["max_avg_density_error"] = m_rho_err_avg_max;
     j["shocks"] = w.clock.rollbacks;
     j["kept_steps"] = m_steps;
-    // What each system adds (a method's own figures: PCISPH's iterations and tracked maxima).
+    // What each system adds (a method's own figures, System::summarise).
     RunTotals totals;
     totals.kept_steps = m_steps;
     totals.counter_sums = &m_counter_sums;

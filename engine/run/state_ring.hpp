@@ -1,7 +1,6 @@
 #pragma once
 /// @file state_ring.hpp
-/// @brief A ring of the last few simulation states for a rollback (PCISPH's shock handling goes
-/// two steps back). A state is every column of the fluid and boundary stores, copied column by
+/// @brief A ring of the last few simulation states for a rollback (a recipe asks for its depth). A state is every column of the fluid and boundary stores, copied column by
 /// column, the clock and every Kept resource (resources.hpp), copied generically.
 /// Slots are reused, so saving allocates only while the ring fills or a set grows.
 #include <cstddef>

@@ -10,6 +10,7 @@
 #include <tbb/parallel_for.h>
 
 #include "engine/data/components.hpp"
+#include "systems/pcisph/pcisph_components.hpp"
 #include "engine/data/world.hpp"
 #include "engine/graph/context.hpp"
 #include "systems/forces/forces_kernels.hpp"

@@ -10,16 +10,29 @@
 #include "engine/data/world.hpp"
 #include "engine/graph/context.hpp"
 #include "systems/pcisph/pcisph_state.hpp"
+#include "systems/timestep/constant_dt_system.hpp"
 #include "systems/timestep/global_dt_system.hpp"
 #include "systems/boundary/boundary_collision_system.hpp"
 #include "systems/boundary/boundary_motion_system.hpp"
 #include "systems/boundary/boundary_volume_system.hpp"
-#include "systems/boundary/pcisph_boundary_systems.hpp"
+#include "systems/pcisph/boundary_active_system.hpp"
+#include "systems/pcisph/boundary_mass_system.hpp"
+#include "systems/pcisph/predict_collision_system.hpp"
+#include "systems/pcisph/world_collision_system.hpp"
 #include "systems/emit/emitter_system.hpp"
 #include "systems/forces/nonpressure_forces_system.hpp"
 #include "systems/metrics/step_stats_system.hpp"
-#include "systems/neighbours/neighbour_search_system.hpp"
-#include "systems/pcisph/pcisph_systems.hpp"
+#include "systems/neighbours/boundary_neighbours_system.hpp"
+#include "systems/neighbours/fluid_grid_system.hpp"
+#include "systems/neighbours/fluid_neighbours_system.hpp"
+#include "systems/pcisph/pcisph_boundary_density_system.hpp"
+#include "systems/pcisph/pcisph_config.hpp"
+#include "systems/pcisph/pcisph_density_system.hpp"
+#include "systems/pcisph/pcisph_integrate_system.hpp"
+#include "systems/pcisph/pcisph_predict_system.hpp"
+#include "systems/pcisph/pcisph_pressure_force_system.hpp"
+#include "systems/pcisph/pcisph_reset_system.hpp"
+#include "systems/pcisph/pcisph_step_size_system.hpp"
 #include "systems/timestep/adaptive_dt_system.hpp"
 
 namespace sph {
@@ -55,7 +68,7 @@ Recipe make_pcisph_recipe(const Scene& scene) {
     std::vector<std::unique_ptr<System>> body;
     body.push_back(std::make_unique<PcisphPredictSystem>(c.nonpressure));
     const double friction = scene.boundary.friction;
-    if (c.boundary) body.push_back(std::make_unique<DirectForcingSystem>(/*predicted=*/true, c.moving, friction));
+    if (c.boundary) body.push_back(std::make_unique<PredictCollisionSystem>(c.moving, friction));
     body.push_back(std::make_unique<PcisphDensitySystem>(c.ihmsen));
     if (c.ihmsen) body.push_back(std::make_unique<PcisphBoundaryDensitySystem>());
     body.push_back(std::make_unique<PcisphPressureForceSystem>(c.ihmsen));
@@ -74,7 +87,7 @@ Recipe make_pcisph_recipe(const Scene& scene) {
 
     r.step.push_back(std::make_unique<PcisphIntegrateSystem>(c.nonpressure));
     if (c.boundary) {
-        r.step.push_back(std::make_unique<DirectForcingSystem>(/*predicted=*/false, c.moving, friction));  // eq. 11-12
+        r.step.push_back(std::make_unique<WorldCollisionSystem>(c.moving, friction));  // eq. 11-12
         r.step.push_back(std::make_unique<BoundaryCollisionSystem>(scene.boundaries, c.moving));  // safety net
     }
     r.step.push_back(std::make_unique<StepStatsSystem>(false));

@@ -1,5 +1,6 @@
 #include "systems/methods/wcsph.hpp"
 
+#include "systems/active/halo_system.hpp"
 #include "systems/active/select_active_system.hpp"
 #include "systems/boundary/boundary_collision_system.hpp"
 #include "systems/boundary/boundary_motion_system.hpp"
@@ -10,8 +11,12 @@
 #include "systems/integrate/async_integration_system.hpp"
 #include "systems/integrate/symplectic_euler_system.hpp"
 #include "systems/metrics/step_stats_system.hpp"
-#include "systems/neighbours/neighbour_search_system.hpp"
+#include "systems/neighbours/boundary_neighbours_system.hpp"
+#include "systems/neighbours/fluid_grid_system.hpp"
+#include "systems/neighbours/fluid_neighbours_system.hpp"
 #include "systems/timestep/dt_propagation_system.hpp"
+#include "systems/timestep/individual_dt_system.hpp"
+#include "systems/timestep/constant_dt_system.hpp"
 #include "systems/timestep/global_dt_system.hpp"
 
 namespace sph {

@@ -1,6 +1,9 @@
 // Ihmsen et al. 2010 sec. 3.3: the initial step dt = 0.25 h / v0_max, then the controller's
 // step; Alg. 2 last line: recompute beta (eq. 5) and delta (eq. 4) when dt changes.
+#include "systems/pcisph/pcisph_step_size_system.hpp"
+
 #include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
 #include <cmath>
@@ -11,11 +14,10 @@
 #include "engine/data/components.hpp"
 #include "engine/data/world.hpp"
 #include "engine/graph/context.hpp"
+#include "systems/pcisph/pcisph_components.hpp"
 #include "systems/pcisph/pcisph_kernels.hpp"
 #include "systems/pcisph/pcisph_state.hpp"
-#include "systems/pcisph/pcisph_systems.hpp"
 #include "systems/timestep/adaptive_controller.hpp"
-#include "systems/timestep/adaptive_dt_system.hpp"
 
 namespace sph {
 
@@ -95,29 +97,6 @@ void PcisphStepSizeSystem::summarise(const World& w, const RunTotals& totals, nl
                    {"dt_eq14_15", std::isfinite(dt_const) ? dt_const : 0.0},
                    {"boundary_handling", m_summary.boundary_handling},
                    {"eta", m_summary.eta}};
-}
-
-Access PcisphResetSystem::access() const {
-    return Access()
-        .write(fluid(comp::pressure), fluid(comp::pressure_acceleration))
-        .write_if(m_ihmsen, boundary(comp::pressure));
-}
-
-void PcisphResetSystem::register_components(World& w) {
-    w.fluid.store.add(comp::pressure);
-    w.fluid.store.add(comp::pressure_acceleration);
-    if (m_ihmsen) w.boundary.store.add(comp::pressure);
-}
-
-void PcisphResetSystem::run(Context& ctx) {
-    auto p = ctx.write(fluid(comp::pressure));
-    auto ap = ctx.write(fluid(comp::pressure_acceleration));
-    std::fill(p.begin(), p.end(), Real(0));
-    std::fill(ap.begin(), ap.end(), Vec3::Zero());
-    if (m_ihmsen) {
-        auto pb = ctx.write(boundary(comp::pressure));
-        std::fill(pb.begin(), pb.end(), Real(0));
-    }
 }
 
 }  // namespace sph

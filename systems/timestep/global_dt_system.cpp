@@ -28,12 +28,5 @@ void GlobalDtSystem::run(Context& ctx) {
     s.set_clipped(s.dt_stable, ctx.clock());
 }
 
-Access ConstantDtSystem::access() const { return Access().write(res::dt); }
-
-void ConstantDtSystem::run(Context& ctx) {
-    StepSize& s = ctx.write(res::dt);
-    s.dt_stable = m_dt;
-    s.set_clipped(m_dt, ctx.clock());
-}
 
 }  // namespace sph

@@ -23,17 +23,5 @@ private:
     SteppingParams m_stepping;
 };
 
-/// @brief He et al. Alg. 1 with a fixed step (`constant`): the scene's dt every step, the last
-/// one clipped so that the run ends exactly at its end time.
-class ConstantDtSystem final : public System {
-public:
-    explicit ConstantDtSystem(double dt) : m_dt(dt) {}
-    std::string name() const override { return "constant_dt"; }
-    Access access() const override;
-    void run(Context& ctx) override;
-
-private:
-    double m_dt;
-};
 
 }  // namespace sph

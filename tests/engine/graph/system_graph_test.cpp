@@ -8,6 +8,7 @@
 #include <mutex>
 
 #include "engine/data/components.hpp"
+#include "systems/pcisph/pcisph_components.hpp"
 #include "engine/data/world.hpp"
 #include "engine/graph/context.hpp"
 #include "engine/graph/system_graph.hpp"

@@ -8,6 +8,7 @@
 #include <numbers>
 
 #include "engine/data/components.hpp"
+#include "systems/pcisph/pcisph_components.hpp"
 #include "engine/core/errors.hpp"
 #include "systems/methods/recipes.hpp"
 #include "systems/pcisph/pcisph_kernels.hpp"

@@ -17,7 +17,9 @@
 #include "systems/forces/forces_kernels.hpp"
 #include "systems/forces/forces_system.hpp"
 #include "systems/forces/gradient_correction_system.hpp"
-#include "systems/neighbours/neighbour_search_system.hpp"
+#include "systems/neighbours/boundary_neighbours_system.hpp"
+#include "systems/neighbours/fluid_grid_system.hpp"
+#include "systems/neighbours/fluid_neighbours_system.hpp"
 #include "test_scenes.hpp"
 
 using namespace sph;

@@ -7,9 +7,12 @@
 #include <random>
 
 #include "engine/data/components.hpp"
+#include "systems/pcisph/pcisph_components.hpp"
 #include "systems/forces/nonpressure_forces_system.hpp"
 #include "systems/methods/recipes.hpp"
-#include "systems/neighbours/neighbour_search_system.hpp"
+#include "systems/neighbours/boundary_neighbours_system.hpp"
+#include "systems/neighbours/fluid_grid_system.hpp"
+#include "systems/neighbours/fluid_neighbours_system.hpp"
 #include "test_scenes.hpp"
 
 using namespace sph;

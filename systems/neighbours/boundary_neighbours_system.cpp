@@ -1,0 +1,28 @@
+// He et al., Alg. 2 line 4 (find neighbours). Uniform grid with cell size = support radius h,
+// candidates from the 27 surrounding cells, exact test |x_i - x_j| < h.
+#include "systems/neighbours/boundary_neighbours_system.hpp"
+
+#include "engine/data/components.hpp"
+#include "engine/data/world.hpp"
+#include "engine/graph/context.hpp"
+
+namespace sph {
+
+namespace {
+QuerySubset subset_of(const Context& ctx, bool individual) {
+    return individual ? QuerySubset{ctx.read(res::active_set), false} : QuerySubset{};
+}
+}  // namespace
+
+Access BoundaryNeighbourSystem::access() const {
+    return Access()
+        .read(fluid(comp::position), res::boundary_grid)
+        .write(res::boundary_neighbours)
+        .read_if(m_individual, res::active_set);
+}
+void BoundaryNeighbourSystem::run(Context& ctx) {
+    build_neighbour_lists(ctx.read(res::boundary_grid), ctx.read(fluid(comp::position)), ctx.physics().h, false,
+                          subset_of(ctx, m_individual), ctx.write(res::boundary_neighbours));
+}
+
+}  // namespace sph

@@ -1,0 +1,22 @@
+#pragma once
+/// @file fluid_neighbours_system.hpp
+/// @brief He et al. Alg. 1 line 3 / Alg. 2 lines 3-4: fluid->fluid neighbour lists.
+#include "engine/graph/system.hpp"
+
+namespace sph {
+
+/// @brief Fluid->fluid neighbour lists (r < h, self excluded) of every fluid particle, or
+/// with individual stepping of the active ones only (He Alg. 2 lines 3-4); inactive
+/// particles keep their last lists.
+class FluidNeighbourSystem final : public System {
+public:
+    explicit FluidNeighbourSystem(bool individual = false) : m_individual(individual) {}
+    std::string name() const override { return "fluid_neighbours"; }
+    Access access() const override;
+    void run(Context& ctx) override;
+
+private:
+    bool m_individual;
+};
+
+}  // namespace sph

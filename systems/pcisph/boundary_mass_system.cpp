@@ -1,0 +1,50 @@
+// Ihmsen et al. 2010 sec. 3.2, eq. 13: m_b = rho0 V_b (Akinci et al. 2012 eq. 4 volume) and the
+// constant boundary part of a boundary particle's density, sum_b' m_b' W_bb'.
+#include "systems/pcisph/boundary_mass_system.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "engine/data/components.hpp"
+#include "engine/data/world.hpp"
+#include "engine/graph/context.hpp"
+#include "systems/pcisph/pcisph_components.hpp"
+#include "systems/pcisph/pcisph_kernels.hpp"
+#include "systems/pcisph/pcisph_state.hpp"
+
+namespace sph {
+
+Access BoundaryMassSystem::access() const {
+    return Access()
+        .read(boundary(comp::position), boundary(comp::volume), res::boundary_grid)
+        .write(boundary(comp::mass), boundary(comp::self_density));
+}
+
+void BoundaryMassSystem::register_components(World& w) {
+    w.boundary.store.add(comp::mass);
+    w.boundary.store.add(comp::self_density);
+}
+
+void BoundaryMassSystem::run(Context& ctx) {
+    const auto x = ctx.read(boundary(comp::position));
+    const auto vol = ctx.read(boundary(comp::volume));
+    auto m = ctx.write(boundary(comp::mass));
+    auto self = ctx.write(boundary(comp::self_density));
+    const Real rho0 = ctx.physics().rest_density;
+    for (std::size_t b = 0; b < x.size(); ++b) m[b] = rho0 * vol[b];
+    const CubicSpline& kernel = ctx.kernel();
+    const Real h2 = kernel.support() * kernel.support();
+    const UniformGrid& grid = ctx.read(res::boundary_grid);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 1024), [&](const auto& r) {
+        for (std::size_t b = r.begin(); b < r.end(); ++b) {
+            Real sum = 0;
+            grid.for_each_candidate(x[b], [&](Index k, const Vec3& xk) {
+                const Real d2 = (x[b] - xk).squaredNorm();
+                if (d2 < h2) sum += m[k] * kernel.w(std::sqrt(d2));
+            });
+            self[b] = sum;
+        }
+    });
+}
+
+}  // namespace sph

@@ -1,0 +1,17 @@
+#pragma once
+/// @file pcisph_components.hpp
+/// @brief The particle columns of PCISPH (Solenthaler & Pajarola 2009; Ihmsen et al. 2010 Alg. 2).
+#include "engine/data/components.hpp"
+
+namespace sph::comp {
+
+inline constexpr Component<Vec3> predicted_position{"predicted_position"};  ///< x*(t + dt)
+inline constexpr Component<Vec3> pressure_acceleration{"pressure_acceleration"};  ///< F^p / m, eq. 6
+/// Viscosity and surface tension per unit mass (only when the scene asks for them).
+inline constexpr Component<Vec3> nonpressure_acceleration{"nonpressure_acceleration"};
+/// Boundary: m_b = rho0 V_b (eq. 13 with Akinci's volume) and the constant boundary part of
+/// its own density, sum_b' m_b' W_bb'.
+inline constexpr Component<Real> mass{"mass"};
+inline constexpr Component<Real> self_density{"self_density"};
+
+}  // namespace sph::comp
