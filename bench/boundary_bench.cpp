@@ -21,7 +21,9 @@
 #include "systems/integrate/symplectic_euler_system.hpp"
 #include "systems/methods/recipes.hpp"
 #include "systems/metrics/step_stats_system.hpp"
-#include "systems/neighbours/neighbour_search_system.hpp"
+#include "systems/neighbours/boundary_neighbours_system.hpp"
+#include "systems/neighbours/fluid_grid_system.hpp"
+#include "systems/neighbours/fluid_neighbours_system.hpp"
 #include "systems/timestep/global_dt_system.hpp"
 
 using namespace sph;

@@ -7,7 +7,9 @@
 #include "systems/density/density_system.hpp"
 #include "systems/forces/forces_system.hpp"
 #include "systems/forces/gradient_correction_system.hpp"
-#include "systems/neighbours/neighbour_search_system.hpp"
+#include "systems/neighbours/boundary_neighbours_system.hpp"
+#include "systems/neighbours/fluid_grid_system.hpp"
+#include "systems/neighbours/fluid_neighbours_system.hpp"
 
 using namespace sph;
 

@@ -9,13 +9,17 @@
 #include <vector>
 
 #include "bench_util.hpp"
+#include "systems/active/halo_system.hpp"
 #include "systems/active/select_active_system.hpp"
 #include "systems/density/density_system.hpp"
 #include "systems/forces/forces_system.hpp"
 #include "systems/forces/gradient_correction_system.hpp"
 #include "systems/integrate/async_integration_system.hpp"
-#include "systems/neighbours/neighbour_search_system.hpp"
+#include "systems/neighbours/boundary_neighbours_system.hpp"
+#include "systems/neighbours/fluid_grid_system.hpp"
+#include "systems/neighbours/fluid_neighbours_system.hpp"
 #include "systems/timestep/dt_propagation_system.hpp"
+#include "systems/timestep/individual_dt_system.hpp"
 
 using namespace sph;
 

@@ -2,7 +2,9 @@
 #include <benchmark/benchmark.h>
 
 #include "bench_util.hpp"
-#include "systems/neighbours/neighbour_search_system.hpp"
+#include "systems/neighbours/boundary_neighbours_system.hpp"
+#include "systems/neighbours/fluid_grid_system.hpp"
+#include "systems/neighbours/fluid_neighbours_system.hpp"
 
 using namespace sph;
 
