@@ -111,7 +111,7 @@ struct FluidParams {
     /// Monaghan alpha between fluid and boundary particles (default: `viscosity`); 0 makes every
     /// wall free-slip (it then exerts only its Akinci pressure force, normal to it).
     std::optional<double> boundary_viscosity;
-    /// WCSPH only: `corrected` for hydrostatic accuracy (README, Validation), at the cost of one
+    /// WCSPH only: `corrected` for hydrostatic accuracy (docs/results/validation.md), at the cost of one
     /// more pass over the neighbours per step.
     PressureGradient pressure_gradient = PressureGradient::Symmetric;
 };

@@ -26,7 +26,7 @@ struct Physics {
     Real spacing = 0;         ///< 2 r: lattice spacing of fluid and boundary sampling
     Real h = 0;               ///< support radius, fluid.support * 2 r (4 r by default)
     Real rest_density = 1000;
-    Real mass = 0;            ///< m = rho0 / sum_j W_ij over a filled lattice (see README)
+    Real mass = 0;            ///< m = rho0 / sum_j W_ij over a filled lattice (docs/methods.md)
     Real speed_of_sound = 0;  ///< c_s
     Real tait_b = 0;          ///< B = rho0 c_s^2 / gamma, gamma = 7 (He eq. 2)
     Real viscosity = 0;       ///< Monaghan alpha

@@ -9,8 +9,8 @@
 /// for longer than its Delta t_i (He Alg. 2 lines 19-21 extrapolate with it). With `paper` it
 /// is active when t_last_i + Delta t_i <= t (He's "<", the tie counted as active): it waits
 /// for the first step that starts at or after its deadline and holds its acceleration for up
-/// to Delta t_i + Delta t_sim, almost 2 Delta t_i when its step is close to Delta t_sim; README,
-/// "Activation", measures what that costs. Either way a particle is also active when a
+/// to Delta t_i + Delta t_sim, almost 2 Delta t_i when its step is close to Delta t_sim; docs/results/he_table1.md
+/// measures what that costs. Either way a particle is also active when a
 /// system woke it (a wall contact since its last evaluation). Delta t_i is converted to ticks
 /// rounding down, the same way the global step is.
 #include <cstdint>

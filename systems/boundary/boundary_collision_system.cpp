@@ -104,7 +104,7 @@ bool collide(const BoundaryDesc& b, Vec3& x, Vec3& v) {
             return true;
         }
         case BoundaryShape::Mesh:
-            return false;  // no analytic surface: the particle boundary alone (see README)
+            return false;  // no analytic surface: the particle boundary alone (docs/methods.md)
     }
     return false;
 }

@@ -20,8 +20,8 @@
 
 namespace sph {
 
-/// @brief Smallest eigenvalue of M_i that is inverted as is (see the file comment). Measured on
-/// the hydrostatic tank (README): 0.25, 0.5 and 0.75 give the same pressures within 1 %.
+/// @brief Smallest eigenvalue of M_i that is inverted as is (see the file comment); how the
+/// value was chosen: docs/results/validation.md (hydrostatic tank).
 inline constexpr Real kMinEigenvalue = Real(0.5);
 
 /// @brief L = M^-1 for the symmetric moment matrix M, eigenvalues clamped below at `min_eigenvalue`.

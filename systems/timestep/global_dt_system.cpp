@@ -1,5 +1,5 @@
 // He et al. eq. 6 (CFL), eq. 7 (force) and eq. 8 (their minimum); the acoustic condition
-// dt <= lambda_c h / (c_s + v_max) is our named option `stepping.acoustic` (README: why).
+// dt <= lambda_c h / (c_s + v_max) is our named option `stepping.acoustic` (docs/methods.md: why).
 #include "systems/timestep/global_dt_system.hpp"
 
 #include <cmath>
