@@ -31,6 +31,33 @@ std::string format_seconds(double s) {
     return buf;
 }
 
+/// Refuses a scene that would not fit in this machine's physical memory, before anything is
+/// sampled (the estimate: sph::estimate_size). The scene loader does not know the machine.
+void check_memory(const sph::Scene& scene, const std::string& file,
+                  const std::vector<std::pair<std::string, nlohmann::json>>& overrides) {
+    const sph::SizeEstimate est = sph::estimate_size(scene);
+    const double physical = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGE_SIZE));
+    if (!(physical > 0 && est.bytes > physical)) return;
+    const auto large = [](double x, int decimals) {  // as the scene loader prints large numbers
+        if (!std::isfinite(x)) return std::string("more than 1e308");
+        char buf[64];
+        if (x < 1e15)
+            std::snprintf(buf, sizeof buf, "%.*f", decimals, x);
+        else
+            std::snprintf(buf, sizeof buf, "%.3g", x);
+        return std::string(buf);
+    };
+    std::string expected = "a larger radius: the scene would need about " +
+                           large(est.bytes / (1024.0 * 1024.0 * 1024.0), 1) + " GiB for " +
+                           large(est.fluid_particles, 0) + " fluid particles, more than this machine's physical memory";
+    for (const auto& [path, value] : overrides)
+        if (path == "/fluid/particle_radius" || path == "/simulation/scale") {
+            expected += " (set on the command line)";
+            break;
+        }
+    throw sph::SceneError(file, "/fluid/particle_radius", nlohmann::json(scene.fluid.particle_radius).dump(), expected);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -130,6 +157,7 @@ int main(int argc, char** argv) {
         }
         sph::Scene scene = sph::parse_scene(scene_text, scene_file, overrides);
         scene.source = scene_file;
+        check_memory(scene, scene_file, overrides);
         const int nthreads = threads > 0 ? threads : tbb::info::default_concurrency();
         tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(nthreads));
 

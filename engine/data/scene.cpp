@@ -26,6 +26,7 @@
 #include <utility>
 
 #include "engine/core/errors.hpp"
+#include "engine/data/scene_detail.hpp"
 
 namespace sph {
 
@@ -156,6 +157,46 @@ bool has_moving_boundaries(const Scene& scene) {
                        [](const BoundaryDesc& b) { return b.motion.has_value(); });
 }
 
+
+namespace scene_detail {
+
+double surface_area(const Aabb& box) {
+    const Vec3d e = box.extent();
+    return 2.0 * (e.x() * e.y() + e.y() * e.z() + e.z() * e.x());
+}
+
+/// Cells per axis as lattice_dims counts them, in double so a tiny radius cannot overflow int.
+Vec3d lattice_cells(const Aabb& box, double spacing) {
+    Vec3d n;
+    for (int a = 0; a < 3; ++a) {
+        const double cells = (box.max[a] - box.min[a]) / spacing + 1e-6;
+        n[a] = cells > 0 ? std::floor(cells) : 0.0;
+    }
+    return n;
+}
+
+double lattice_count(const Aabb& box, double spacing) {
+    const Vec3d cells = lattice_cells(box, spacing);
+    if (cells.maxCoeff() < 1e9) {  // fits lattice_dims' int: use the engine's own count
+        const Eigen::Vector3i n = lattice_dims(box, spacing);
+        return static_cast<double>(n[0]) * n[1] * n[2];
+    }
+    return cells.prod();
+}
+
+}  // namespace scene_detail
+
+SizeEstimate estimate_size(const Scene& s) {
+    using namespace scene_detail;
+    const double spacing = 2.0 * s.particle_radius();
+    SizeEstimate e;
+    double area = 0.0;
+    for (const FluidBlock& b : s.fluid_blocks) e.fluid_particles += lattice_count(b.box, spacing);
+    for (const BoundaryDesc& b : s.boundaries)
+        area += b.shape == BoundaryShape::Sphere ? 4.0 * std::numbers::pi * b.radius * b.radius : surface_area(b.box);
+    e.bytes = e.fluid_particles * 400.0 + area / (spacing * spacing) * 100.0;
+    return e;
+}
 
 double Scene::particle_radius() const {
     return fluid.particle_radius / std::cbrt(simulation.scale);

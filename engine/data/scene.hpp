@@ -230,6 +230,16 @@ struct Scene {
 /// @brief True when any boundary of the scene has a motion.
 bool has_moving_boundaries(const Scene& scene);
 
+/// @brief A scene's size before sampling, for a memory check by the program that runs it: the
+/// fluid particles on the blocks' lattices and an estimate of the bytes they and the boundary
+/// need (~400 per fluid particle with every column and list, ~100 per boundary particle at
+/// spacing 2 r on the boundary surfaces).
+struct SizeEstimate {
+    double fluid_particles = 0;
+    double bytes = 0;
+};
+SizeEstimate estimate_size(const Scene& scene);
+
 /// @brief Loads and validates a scene file. Throws SceneError (a typed InputError) naming the
 /// file, the JSON path, the value found and what was expected.
 /// @param overrides JSON-pointer paths and values applied before validation (command line).

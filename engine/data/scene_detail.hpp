@@ -73,6 +73,12 @@ inline constexpr std::array<const char*, 7> k_attributes{"position", "velocity",
                                                   "acceleration", "dt",       "active"};
 
 
+// ---- Geometry of the schema (scene.cpp). ----
+double surface_area(const Aabb& box);
+/// Cells per axis as lattice_dims counts them, in double so a tiny radius cannot overflow int.
+Vec3d lattice_cells(const Aabb& box, double spacing);
+double lattice_count(const Aabb& box, double spacing);
+
 // ---- Small string helpers (scene_text.cpp). ----
 std::string escape_token(std::string_view key);
 std::string child(const std::string& path, std::string_view key);

@@ -6,7 +6,6 @@
 
 #include <Eigen/Geometry>
 
-#include <unistd.h>
 
 #include <algorithm>
 #include <array>
@@ -133,30 +132,6 @@ double clearance(const BoundaryDesc& b, const Vec3d& p) {
             break;
     }
     return std::numeric_limits<double>::infinity();
-}
-
-double surface_area(const Aabb& box) {
-    const Vec3d e = box.extent();
-    return 2.0 * (e.x() * e.y() + e.y() * e.z() + e.z() * e.x());
-}
-
-/// Cells per axis as lattice_dims counts them, in double so a tiny radius cannot overflow int.
-Vec3d lattice_cells(const Aabb& box, double spacing) {
-    Vec3d n;
-    for (int a = 0; a < 3; ++a) {
-        const double cells = (box.max[a] - box.min[a]) / spacing + 1e-6;
-        n[a] = cells > 0 ? std::floor(cells) : 0.0;
-    }
-    return n;
-}
-
-double lattice_count(const Aabb& box, double spacing) {
-    const Vec3d cells = lattice_cells(box, spacing);
-    if (cells.maxCoeff() < 1e9) {  // fits lattice_dims' int: use the engine's own count
-        const Eigen::Vector3i n = lattice_dims(box, spacing);
-        return static_cast<double>(n[0]) * n[1] * n[2];
-    }
-    return cells.prod();
 }
 
 /// A JSON value and its path.
@@ -843,28 +818,6 @@ class Reader {
 
         for (std::size_t i = 0; i < s.emitters.size(); ++i) check_emitter(s, at_start, i, spacing);
 
-        // Memory estimate: ~400 bytes per fluid particle (all columns, neighbour lists), ~100
-        // per boundary particle sampled at spacing 2 r on the boundary surfaces.
-        double fluid_count = 0.0, area = 0.0;
-        for (const FluidBlock& b : s.fluid_blocks) fluid_count += lattice_count(b.box, spacing);
-        for (const BoundaryDesc& b : s.boundaries) {
-            area += b.shape == BoundaryShape::Sphere ? 4.0 * std::numbers::pi * b.radius * b.radius
-                                                     : surface_area(b.box);
-        }
-        const double bytes = fluid_count * 400.0 + area / (spacing * spacing) * 100.0;
-        const double physical = static_cast<double>(sysconf(_SC_PHYS_PAGES)) *
-                                static_cast<double>(sysconf(_SC_PAGE_SIZE));
-        if (physical > 0 && bytes > physical) {
-            const std::string found = m_doc.contains(json::json_pointer(radius_path))
-                                          ? dump_at(radius_path)
-                                          : fmt_num(s.fluid.particle_radius);
-            fail_at(radius_path, found,
-                    "a larger radius: the scene would need about " +
-                        fmt_large(bytes / (1024.0 * 1024.0 * 1024.0), 1) + " GiB for " +
-                        fmt_large(fluid_count, 0) +
-                        " fluid particles, more than this machine's physical memory",
-                    {radius_path, scale_path});
-        }
     }
 
     /// An emitter's disc (its candidate lattice, emitter_system.cpp) and the two particle layers
