@@ -3,7 +3,8 @@
 # 'method mode' pair it loads with (sph-run --list-modes), once with the sph-run of BEFORE (a
 # commit, built in a worktree) and once with AFTER (a commit, or the working tree by default),
 # and compares, byte for byte, every frame (all three formats, every attribute), every probe
-# series, the physics columns of stats.csv and the physics keys of summary.json.
+# series, the physics columns of stats.csv and the physics keys of summary.json; plus one
+# 1.2 s run of scenes/shock.json, whose PCISPH shock detection rolls steps back.
 #
 # usage: tools/check_identical.sh BEFORE [AFTER]     e.g. tools/check_identical.sh f460fa9
 #   SPH_CHECK_END   simulated seconds per run (default 0.04)
@@ -50,6 +51,10 @@ run_all() {
         >"$out/$name-$method-$mode.log" 2>&1 || echo "exit $? (kept: the other side must fail alike)" >>"$out/$name-$method-$mode.log"
     done < <("$exe" "$scene" --list-modes -q)
   done
+  # One longer run that rolls back (PCISPH shock detection discards steps 294 and 298 of
+  # scenes/shock.json), so the rollback path is compared too.
+  "$exe" scenes/shock.json -q --threads 2 --end 1.2 --set simulation.frame_rate=10 --out "$out/shock-rollback" \
+    >"$out/shock-rollback.log" 2>&1 || echo "exit $?" >>"$out/shock-rollback.log"
 }
 
 # A commit's outputs are kept (out-<sha>/, marked complete by .done) and reused; the working
