@@ -17,7 +17,6 @@
 #include "engine/core/errors.hpp"
 #include "systems/debug/nan_injection_system.hpp"
 #include "systems/methods/recipes.hpp"
-#include "systems/timestep/global_dt_system.hpp"
 #include "test_scenes.hpp"
 
 using namespace sph;
@@ -167,7 +166,13 @@ TEST(Extremes, TinyAndHugeRadiiFollowFroudeScaling) {
 }
 
 // A single particle under global stepping: its density is m W(0) < rho0, so p = 0 and it falls
-// freely; dt is min(lambda_f sqrt(h / g), lambda_v h / v, acoustic) and v follows g t.
+// freely and v follows g t. Its step is He eq. 6-8 with the acoustic bound, worked out here in
+// closed form: h = 4 r = 0.04 m; c_s = v_ref / sqrt(0.01) with v_ref = sqrt(2 g H) and H = 2.01 m
+// (particle centre y = 0.01 m above the domain floor y = -2 m, no boundaries), i.e.
+// sqrt(2 * 9.81 * 2.01) / 0.1 = 62.80 m/s. At t ~ 0.1 s (v ~ 0.98 m/s, a = g):
+//   eq. 6  0.1 * 0.04 / 0.98             = 4.1e-3 s
+//   eq. 7  0.05 * sqrt(0.04 / 9.81)      = 3.2e-3 s
+//   acoustic 0.4 * 0.04 / (62.80 + 0.98) = 2.5e-4 s   <- binds
 TEST(Extremes, SingleParticleGlobalStepping) {
     Scene s;
     s.name = "one";
@@ -183,17 +188,31 @@ TEST(Extremes, SingleParticleGlobalStepping) {
     // The last step was sized from the state at its start: a = g, v = v_end - g dt.
     EXPECT_NEAR(w.stats.a_max, 9.81, 1e-5);
     EXPECT_NEAR(w.stats.v_max, std::abs(v.y()) - 9.81 * w.step_size.dt, 1e-5);
-    const double expect =
-        global_time_step(s.simulation.stepping, w.physics.h, w.physics.speed_of_sound, w.stats.v_max, w.stats.a_max);
-    EXPECT_NEAR(w.step_size.dt_stable, expect, 1e-9 * expect);
-    EXPECT_GT(sim->steps(), 10);
+    // h and c_s are stored as float: 1e-6 relative on c_s, 1e-7 on the step (h is 0.04 (1 - 2.2e-8),
+    // c_s within half a float ulp, 6e-8).
+    const double c_s = std::sqrt(2 * 9.81 * 2.01) / 0.1;
+    EXPECT_NEAR(w.physics.speed_of_sound, c_s, 1e-6 * c_s);
+    const double v_max = w.stats.v_max, a_max = w.stats.a_max;
+    const double expect = 0.4 * 0.04 / (c_s + v_max);  // acoustic
+    EXPECT_GT(0.1 * 0.04 / v_max, 10 * expect);               // eq. 6 does not bind
+    EXPECT_GT(0.05 * std::sqrt(0.04 / a_max), 10 * expect);   // eq. 7 does not bind
+    EXPECT_NEAR(w.step_size.dt_stable, expect, 1e-7 * expect);
+    EXPECT_NEAR(expect, 2.51e-4, 0.01e-4);  // the decimal of the comment
+    // 0.1 s at ~2.51e-4 s per step (the step shrinks from 2.55e-4 s at v = 0 to 2.51e-4 s):
+    // ceil(0.1 / 2.55e-4) = 393 to ceil(0.1 / 2.51e-4) = 399 steps.
+    EXPECT_GE(sim->steps(), 393);
+    EXPECT_LE(sim->steps(), 399);
 }
 
 // No fluid at all (possible when a scene is built in code; a scene file must have a fluid
-// block): every mode reaches the end time without touching a particle. `constant` takes its
-// dt; `global` takes eq. 6-8 with v = a = 0, i.e. the acoustic bound lambda_c h / c_s (c_s
-// from v_ref = 1 m/s when nothing moves or falls); `individual` has no particle to limit the
-// step and takes dt_max.
+// block): every mode reaches the end time without touching a particle. The step counts to
+// t = 0.1 s, worked out by hand:
+//   `constant`   dt = 4e-4 s (the default)                          -> 0.1 / 4e-4 = 250 steps
+//   `global`     eq. 6-8 with v = a = 0 leave the acoustic bound lambda_c h / c_s, c_s from
+//                v_ref = 1 m/s when nothing moves or falls: c_s = 1 / sqrt(0.01) = 10 m/s,
+//                dt = 0.4 * 0.04 / 10 = 1.6e-3 s                    -> 0.1 / 1.6e-3 = 62.5: 63 steps
+//                (the last one clipped to 0.8 ms)
+//   `individual` no particle limits the step: dt_max = 5e-3 s       -> 0.1 / 5e-3 = 20 steps
 TEST(Extremes, EmptyFluidSetSteps) {
     for (const SteppingMode mode : k_modes) {
         Scene s = test::tank_scene(Vec3d(0.02, 0.02, 0.02), Vec3d(0.2, 0.2, 0.2));
@@ -203,13 +222,14 @@ TEST(Extremes, EmptyFluidSetSteps) {
         EXPECT_EQ(sim->world().fluid.size(), 0u);
         sim->run_until(0.1);
         EXPECT_NEAR(sim->time(), 0.1, 1e-12) << to_string(mode);
-        const auto& p = s.simulation.stepping;
         const World& w = sim->world();
-        const double dt = mode == SteppingMode::Constant ? p.dt
-                          : mode == SteppingMode::Global
-                              ? global_time_step(p, w.physics.h, w.physics.speed_of_sound, 0.0, 0.0)
-                              : p.dt_max;
-        EXPECT_EQ(sim->steps(), std::llround(std::ceil(0.1 / dt - 1e-9))) << to_string(mode);
+        EXPECT_FLOAT_EQ(w.physics.speed_of_sound, 10.0f);
+        const std::int64_t steps = mode == SteppingMode::Constant ? 250 : mode == SteppingMode::Global ? 63 : 20;
+        EXPECT_EQ(sim->steps(), steps) << to_string(mode);
+        if (mode == SteppingMode::Global) {
+            // 1.6e-3 s with the float h (0.04 (1 - 2.2e-8)): to 1e-7 relative.
+            EXPECT_NEAR(w.step_size.dt_stable, 1.6e-3, 1.6e-10);
+        }
     }
 }
 

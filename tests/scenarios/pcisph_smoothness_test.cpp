@@ -65,5 +65,12 @@ TEST(PcisphSmoothness, FloorPressureRatioLowerWithIhmsenThanDirectForcing) {
     const double ihmsen = max_floor_pressure_ratio(BoundaryHandling::Ihmsen);
     const double direct = max_floor_pressure_ratio(BoundaryHandling::DirectForcing);
     EXPECT_GT(ihmsen, 0.0);
-    EXPECT_LT(ihmsen, direct);
+    // Measured (2 threads and 1 thread alike: the run is deterministic): ihmsen 156.0,
+    // direct_forcing 823.5, a ratio of 5.3 (docs/results/ihmsen_table1.md still records 52.6 for
+    // ihmsen, a ratio of 16). The margin 2 sits near the geometric middle of 1 and 5.3
+    // (sqrt(5.3) = 2.3): the test still demands that the boundary of sec. 3.2 at least halves the
+    // worst floor pressure ratio, and ihmsen's value may grow 2.6x (to 412) before it fails. A
+    // margin of 4 would leave only 1.3x (206) above the measured 156. There is no noise to allow
+    // for: the same build gives the same numbers.
+    EXPECT_LT(ihmsen, direct / 2);
 }

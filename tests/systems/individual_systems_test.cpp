@@ -207,6 +207,8 @@ void check_fraction(double fraction) {
         }
         EXPECT_NEAR((acc[i].cast<double>() - a).norm(), 0.0, 1e-4 * amax) << "particle " << i;
         EXPECT_NEAR(drho[i], d, 1e-4 * dmax) << "particle " << i;
+        // He Alg. 2 line 13: dt_raw is the same function as the global step (eq. 6-8), so
+        // global_time_step is the oracle here (it is pinned by hand in global_dt_system_test.cpp).
         const double raw = global_time_step(w.scene.simulation.stepping, h, ph.speed_of_sound, v[i].norm(), acc[i].norm());
         EXPECT_NEAR(dt_raw[i], raw, 1e-5 * raw) << "particle " << i;
     }
