@@ -76,19 +76,32 @@ void build_neighbour_lists(const UniformGrid& grid, std::span<const Vec3> query_
             lists.indices.resize(n * std::size_t(lists.capacity));
         std::atomic<Index> overflow{0};
         const Index cap = lists.capacity;
+        const std::span<const Index> sorted_index = grid.sorted_index();
+        const std::span<const Vec3> sorted_pos = grid.sorted_positions();
+        tbb::enumerable_thread_specific<std::vector<Index>> scratch;
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m, 256), [&](const auto& r) {
             Index local_max = 0;
+            std::vector<Index>& found = scratch.local();
             for (std::size_t q = r.begin(); q < r.end(); ++q) {
                 const Index i = subset.all ? Index(q) : subset.indices[q];
                 const Vec3 xi = query_positions[i];
                 Index* out = lists.indices.data() + std::size_t(i) * cap;
+                // Branch-free filter: every candidate is written to `found` and the cursor
+                // advances only when it is in range, so the loop has no data-dependent branch
+                // (the in-range test is a coin toss for about half the candidates once the
+                // start lattice has become disordered, and a branch mispredicts on it).
                 Index c = 0;
-                grid.for_each_candidate(xi, [&](Index j, const Vec3& xj) {
-                    if ((xi - xj).squaredNorm() < r2 && !(exclude_self && j == i)) {
-                        if (c < cap) out[c] = j;
-                        ++c;
+                grid.for_each_candidate_range(xi, [&](Index b, Index e) {
+                    if (found.size() < std::size_t(c) + (e - b)) found.resize(2 * (std::size_t(c) + (e - b)));
+                    Index* dst = found.data();
+                    for (Index k = b; k < e; ++k) {
+                        const Index j = sorted_index[k];
+                        const Vec3 d = xi - sorted_pos[k];
+                        dst[c] = j;
+                        c += Index(d.squaredNorm() < r2) & Index(!(exclude_self && j == i));
                     }
                 });
+                std::copy_n(found.data(), std::min(c, cap), out);
                 lists.count[i] = c;
                 local_max = std::max(local_max, c);
             }

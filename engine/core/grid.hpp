@@ -52,6 +52,22 @@ public:
             }
     }
 
+    /// @brief Calls fn(begin, end) for the 9 contiguous ranges of sorted slots that hold the 27
+    /// cells around x (the same candidates, in the same order, as for_each_candidate); the
+    /// slots index sorted_index() and sorted_positions().
+    template <class Fn>
+    void for_each_candidate_range(const Vec3& x, Fn&& fn) const {
+        const Eigen::Vector3i c = cell_coords(x);
+        const int x0 = std::max(c[0] - 1, 0), x1 = std::min(c[0] + 1, m_dims[0] - 1);
+        for (int z = std::max(c[2] - 1, 0); z <= std::min(c[2] + 1, m_dims[2] - 1); ++z)
+            for (int y = std::max(c[1] - 1, 0); y <= std::min(c[1] + 1, m_dims[1] - 1); ++y) {
+                const std::int64_t row = cell_index({0, y, z});
+                fn(m_cell_start[row + x0], m_cell_start[row + x1 + 1]);
+            }
+    }
+    std::span<const Index> sorted_index() const { return m_sorted_index; }
+    std::span<const Vec3> sorted_positions() const { return m_sorted_pos; }
+
     const Eigen::Vector3i& dims() const { return m_dims; }
     Real cell_size() const { return m_cell; }
     std::size_t cell_count() const { return m_cell_start.empty() ? 0 : m_cell_start.size() - 1; }
