@@ -26,26 +26,12 @@ namespace {
 // 8 x 10 x 5 = 400 fluid particles in the corner of a 0.3 x 0.3 x 0.1 m container, jittered by
 // 0.3 r (kept 2 mm inside the walls).
 void make_block(World& w, std::uint32_t seed) {
-    Scene s = test::tank_scene(Vec3d(0.16, 0.2, 0.1), Vec3d(0.3, 0.3, 0.1));
-    initialise_world(w, s);
-    std::mt19937 rng(seed);
-    std::uniform_real_distribution<Real> u(-1, 1);
-    auto x = w.fluid.store.get(comp::position);
-    for (auto& p : x) {
-        p += Vec3(u(rng), u(rng), u(rng)) * (0.3f * w.physics.particle_radius);
-        p = p.cwiseMax(Vec3::Constant(0.002f));
-    }
+    initialise_world(w, test::tank_scene(Vec3d(0.16, 0.2, 0.1), Vec3d(0.3, 0.3, 0.1)));
+    test::jitter(w, seed, 0.3f);
 }
 
 // Moves every particle by up to 0.5 r per axis: enough to change many lists.
-void move(World& w, std::uint32_t seed) {
-    std::mt19937 rng(seed);
-    std::uniform_real_distribution<Real> u(-1, 1);
-    for (auto& p : w.fluid.store.get(comp::position)) {
-        p += Vec3(u(rng), u(rng), u(rng)) * (0.5f * w.physics.particle_radius);
-        p = p.cwiseMax(Vec3::Constant(0.002f));
-    }
-}
+void move(World& w, std::uint32_t seed) { test::jitter(w, seed, 0.5f); }
 
 std::vector<Index> brute(std::span<const Vec3> x, Index i, Real h) {
     std::vector<Index> out;
@@ -54,11 +40,7 @@ std::vector<Index> brute(std::span<const Vec3> x, Index i, Real h) {
     return out;
 }
 
-std::vector<Index> sorted(std::span<const Index> s) {
-    std::vector<Index> v(s.begin(), s.end());
-    std::sort(v.begin(), v.end());
-    return v;
-}
+std::vector<Index> sorted(std::span<const Index> s) { return test::sorted_copy(s); }
 
 }  // namespace
 
