@@ -43,7 +43,7 @@ for handling in ("ihmsen", "direct_forcing"):
     for dt in [float(x) for x in args.dts.split(",")]:
         out = out_root / f"{handling}_{dt:g}"
         out.mkdir(parents=True, exist_ok=True)
-        # The scene with a fluid probe sampled every step (engine/probes.hpp: whole-fluid and
+        # The scene with a fluid probe sampled every step (engine/run/probes.hpp: whole-fluid and
         # interior density errors). Written next to the outputs; the scene has no relative files.
         probed = dict(scene)
         probed["probes"] = [{"type": "fluid", "name": "fluid", "rate": 1.0 / dt}]

@@ -11,9 +11,13 @@ seconds=${1:-60}
 out=build-fuzz
 mkdir -p "$out/corpus"
 cxx=$(command -v clang++ || command -v clang++-14)
-if [ ! -x "$out/scene_fuzzer" ] || [ -n "$(find engine/scene.cpp engine/scene.hpp engine/motion.cpp engine/errors.cpp engine/probe_desc.cpp engine/probe_desc.hpp tests/fuzz/scene_fuzzer.cpp -newer "$out/scene_fuzzer")" ]; then
+# The scene loader and what it links: the schema, its three stages, motions, probes, errors.
+sources=(engine/data/scene.cpp engine/data/scene_text.cpp engine/data/scene_overrides.cpp engine/data/scene_reader.cpp
+         engine/data/motion.cpp engine/data/probe_desc.cpp engine/core/errors.cpp)
+if [ ! -x "$out/scene_fuzzer" ] ||
+   [ -n "$(find "${sources[@]}" engine/data/*.hpp engine/core/*.hpp tests/fuzz/scene_fuzzer.cpp -newer "$out/scene_fuzzer")" ]; then
   "$cxx" -std=c++20 -O1 -g -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined \
-    -I. -I/usr/include/eigen3 tests/fuzz/scene_fuzzer.cpp engine/scene.cpp engine/errors.cpp engine/motion.cpp engine/probe_desc.cpp \
+    -I. -I/usr/include/eigen3 tests/fuzz/scene_fuzzer.cpp "${sources[@]}" \
     -o "$out/scene_fuzzer"
 fi
 # Work on a copy: the repository's corpus changes only with --merge.

@@ -59,7 +59,7 @@ std::vector<std::string> stepping_mode_names();
 /// `individual`, whose defaults are lambda_v 0.05, lambda_f 0.025 and no acoustic condition).
 struct SteppingParams {
     SteppingMode mode = SteppingMode::Global;
-    double dt = 4e-4;          ///< s; the step of `constant`, and the first step of `global`.
+    double dt = 4e-4;          ///< s; the step of `constant` (`global` computes every step, the first too).
     double lambda_v = 0.1;     ///< He eq. 6 CFL coefficient.
     double lambda_f = 0.05;    ///< He eq. 7 force coefficient.
     bool acoustic = true;      ///< Also apply dt <= lambda_c h / (c_s + v_max).

@@ -53,7 +53,13 @@ public:
     /// @brief The counter to set this step (declared with write(counter::...)).
     std::uint64_t& write(const Counter& c) const {
         require(m_access.may_write(key_of(c)), "write", key_of(c));
-        return m_world.counters[std::string(c.name)];
+        // Counters are created before any system runs (SystemGraph, run_system), so concurrent
+        // systems only look them up and never insert into the map.
+        const auto it = m_world.counters.find(c.name);
+        if (it == m_world.counters.end())
+            throw AccessError("counter '" + std::string(c.name) + "' of system '" + m_system +
+                              "' was not created before the system ran");
+        return it->second;
     }
 
     /// @brief Changes a set's size (every column; new rows zero). Declared with Access::resizes.

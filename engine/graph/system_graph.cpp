@@ -158,6 +158,7 @@ namespace sph {
 
 void run_system(System& system, World& world) {
     const Access access = system.access();
+    for (const auto& c : access.counters()) world.counters.try_emplace(c, 0);
     Context ctx(world, system.name(), access);
     system.run(ctx);
 }

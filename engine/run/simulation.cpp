@@ -141,8 +141,8 @@ std::string Simulation::step_size_owner() const {
 }
 
 void Simulation::run_until(double end_time, const std::function<void(const Simulation&)>& after_step) {
-    // Stop when the remaining time is below a millionth of a step, so round-off never adds
-    // a sliver step at the end.
+    // The end in whole ticks (rounded to the nearest): the step-size systems clip the last step
+    // to land on it exactly, so round-off never adds a sliver step at the end.
     m_world.clock.t_stop = end_time;
     const Tick end = to_ticks(end_time + 0.5 * kSecondsPerTick);
     while (m_world.clock.t_ticks < end) {

@@ -23,6 +23,10 @@ Access AdaptiveDtSystem::access() const {
     return Access().read(res::stats, res::dt).write(res::pcisph_controller, res::rollback);
 }
 
+void AdaptiveDtSystem::register_components(World& w) {
+    w.resources.add<PcisphController>(res::pcisph_controller.name, Lifetime::Kept);
+}
+
 void AdaptiveDtSystem::run(Context& ctx) {
     const StepSize& st = ctx.read(res::dt);
     const StepStats& stats = ctx.read(res::stats);

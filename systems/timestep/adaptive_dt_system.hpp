@@ -18,6 +18,8 @@ public:
     explicit AdaptiveDtSystem(AdaptiveParams params) : m_params(params) {}
     std::string name() const override { return "adaptive_dt"; }
     Access access() const override;
+    /// @brief Registers the controller it writes (also registered by pcisph_dt, which reads it).
+    void register_components(World& w) override;
     void run(Context& ctx) override;
 
 private:

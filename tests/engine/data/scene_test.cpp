@@ -64,7 +64,9 @@ TEST(SceneLoader, MalformedCorpusFailsWithExactMessages) {
     for (const auto& entry : fs::directory_iterator(k_corpus)) {
         // runner_*: refused by sph-run, not by the loader (tests/bad_scenes_cli.sh runs them).
         if (entry.path().filename().string().rfind("runner_", 0) == 0) {
-            if (entry.path().extension() == ".json") EXPECT_NO_THROW(load_scene(entry.path())) << entry.path();
+            if (entry.path().extension() == ".json") {
+                EXPECT_NO_THROW(load_scene(entry.path())) << entry.path();
+            }
             continue;
         }
         if (entry.path().extension() == ".json") files.push_back(entry.path());
