@@ -74,11 +74,18 @@ std::string checkpoint_error(F&& f) {
     return "<no error>";
 }
 
-const fs::path k_dir = fs::temp_directory_path() / "sph_checkpoint_test";
+/// A directory of this test's own: ctest runs the tests of this file as separate processes at
+/// the same time, so a shared directory removed by one test vanished under another (seen in an
+/// ASan stage).
+fs::path test_dir() {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    return fs::temp_directory_path() / (std::string("sph_checkpoint_test_") + info->name());
+}
 
 }  // namespace
 
 TEST(Checkpoint, ResumedRunIsBitIdenticalInEveryMode) {
+    const fs::path k_dir = test_dir();
     fs::create_directories(k_dir);
     // `individual` under both activation rules; `paper` leaves part of the fluid asleep at the
     // checkpoint, which is the case that needs the saved neighbour lists.
@@ -109,6 +116,7 @@ TEST(Checkpoint, ResumedRunIsBitIdenticalInEveryMode) {
             EXPECT_LT(a->world().counter_value("active"), a->world().fluid.size());
         }
     }
+    fs::remove_all(k_dir);
 }
 
 // PCISPH `adaptive` with an emitter: the controller's pending step, delta and the emitters'
@@ -116,6 +124,7 @@ TEST(Checkpoint, ResumedRunIsBitIdenticalInEveryMode) {
 // version 1) a resumed `glass` run took another step at once (1.40 ms instead of 0.72 ms at step
 // 98) and emitted 759 particles instead of 756; this test would have failed there.
 TEST(Checkpoint, ResumedPcisphAdaptiveRunWithEmitterIsBitIdentical) {
+    const fs::path k_dir = test_dir();
     fs::create_directories(k_dir);
     Scene s = load_scene(SPH_SOURCE_DIR "/scenes/glass.json");
     s.simulation.frame_rate = 0;
@@ -134,9 +143,11 @@ TEST(Checkpoint, ResumedPcisphAdaptiveRunWithEmitterIsBitIdentical) {
     EXPECT_EQ(a->world().step_size.dt_ticks, b->world().step_size.dt_ticks);
     EXPECT_TRUE(state_bytes(a->world()) == state_bytes(b->world()))
         << "the resumed PCISPH run differs from the uninterrupted one";
+    fs::remove_all(k_dir);
 }
 
 TEST(Checkpoint, DamagedFilesAreRefusedWithTheReason) {
+    const fs::path k_dir = test_dir();
     fs::create_directories(k_dir);
     const Scene s = stirred_tank(SteppingMode::Global);
     auto sim = make_simulation(s);
