@@ -2,7 +2,7 @@
 # Installs the Debian 12 packages the build needs, only if some are missing (run as root).
 set -euo pipefail
 PACKAGES=(build-essential cmake libtbb-dev libeigen3-dev libspdlog-dev nlohmann-json3-dev libcli11-dev
-          libgtest-dev libgmock-dev libbenchmark-dev libpng-dev python3 python3-numpy python3-matplotlib
+          libgtest-dev libgmock-dev libbenchmark-dev libpng-dev libhwy-dev python3 python3-numpy python3-matplotlib
           clang libclang-rt-14-dev)  # clang + its runtime: libFuzzer for tools/fuzz.sh
 missing=()
 for p in "${PACKAGES[@]}"; do

@@ -1,11 +1,14 @@
 #include "engine/core/grid.hpp"
 
+#include "engine/core/neighbour_filter.hpp"
+
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 #include <tbb/parallel_sort.h>
 
 #include <atomic>
+#include <limits>
 
 namespace sph {
 
@@ -20,7 +23,7 @@ UniformGrid::UniformGrid(const Aabb& box, Real cell_size) : m_cell(cell_size), m
 
 std::size_t UniformGrid::bytes() const {
     return m_keys.capacity() * sizeof(std::uint64_t) + m_cell_start.capacity() * sizeof(Index) +
-           m_sorted_index.capacity() * sizeof(Index) + m_sorted_pos.capacity() * sizeof(Vec3);
+           m_sorted_index.capacity() * sizeof(Index) + 3 * m_sx.capacity() * sizeof(Real);
 }
 
 void UniformGrid::build(std::span<const Vec3> positions) {
@@ -32,8 +35,16 @@ void UniformGrid::build(std::span<const Vec3> positions) {
     });
     // Keys are unique, so the order is deterministic whatever the thread count.
     tbb::parallel_sort(m_keys.begin(), m_keys.end());
-    m_sorted_index.resize(n);
-    m_sorted_pos.resize(n);
+    m_count = n;
+    m_sorted_index.resize(n + kPadding, 0);
+    // The padding slots hold a point far outside every query's range, so a whole vector
+    // loaded at the end of the last range filters them out.
+    m_sx.resize(n + kPadding, std::numeric_limits<Real>::max());
+    m_sy.resize(n + kPadding, std::numeric_limits<Real>::max());
+    m_sz.resize(n + kPadding, std::numeric_limits<Real>::max());
+    std::fill(m_sx.begin() + n, m_sx.end(), std::numeric_limits<Real>::max());
+    std::fill(m_sy.begin() + n, m_sy.end(), std::numeric_limits<Real>::max());
+    std::fill(m_sz.begin() + n, m_sz.end(), std::numeric_limits<Real>::max());
     const std::size_t cells = cell_count();
     // cell_start[c] = first sorted slot whose cell >= c, for every c (empty cells included),
     // so that a row of cells is one contiguous range.
@@ -41,7 +52,9 @@ void UniformGrid::build(std::span<const Vec3> positions) {
         for (std::size_t k = r.begin(); k < r.end(); ++k) {
             const Index i = Index(m_keys[k] & 0xffffffffu);
             m_sorted_index[k] = i;
-            m_sorted_pos[k] = positions[i];
+            m_sx[k] = positions[i].x();
+            m_sy[k] = positions[i].y();
+            m_sz[k] = positions[i].z();
             const std::uint64_t c = m_keys[k] >> 32;
             const std::uint64_t prev = k == 0 ? 0 : (m_keys[k - 1] >> 32) + 1;
             for (std::uint64_t cc = prev; cc <= c; ++cc) m_cell_start[cc] = Index(k);
@@ -65,19 +78,22 @@ std::size_t NeighbourLists::total() const {
 
 void build_neighbour_lists(const UniformGrid& grid, std::span<const Vec3> query_positions,
                            Real radius, bool exclude_self, const QuerySubset& subset,
-                           NeighbourLists& lists) {
+                           NeighbourLists& lists, bool simd) {
     const std::size_t n = query_positions.size();
     const Real r2 = radius * radius;
     if (lists.count.size() != n) lists.count.assign(n, 0);
     if (lists.capacity == 0) lists.capacity = 48;
     const std::size_t m = subset.all ? n : subset.indices.size();
+    constexpr Index kNoSelf = ~Index(0);
     for (;;) {
         if (lists.indices.size() != n * std::size_t(lists.capacity))
             lists.indices.resize(n * std::size_t(lists.capacity));
         std::atomic<Index> overflow{0};
         const Index cap = lists.capacity;
         const std::span<const Index> sorted_index = grid.sorted_index();
-        const std::span<const Vec3> sorted_pos = grid.sorted_positions();
+        const Real* sx = grid.sorted_x();
+        const Real* sy = grid.sorted_y();
+        const Real* sz = grid.sorted_z();
         tbb::enumerable_thread_specific<std::vector<Index>> scratch;
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m, 256), [&](const auto& r) {
             Index local_max = 0;
@@ -86,21 +102,28 @@ void build_neighbour_lists(const UniformGrid& grid, std::span<const Vec3> query_
                 const Index i = subset.all ? Index(q) : subset.indices[q];
                 const Vec3 xi = query_positions[i];
                 Index* out = lists.indices.data() + std::size_t(i) * cap;
-                // Branch-free filter: every candidate is written to `found` and the cursor
-                // advances only when it is in range, so the loop has no data-dependent branch
-                // (the in-range test is a coin toss for about half the candidates once the
-                // start lattice has become disordered, and a branch mispredicts on it).
+                std::size_t candidates = 0;
+                grid.for_each_candidate_range(xi, [&](Index b, Index e) { candidates += e - b; });
+                // One vector of slack for the vectorised filter's whole-vector stores.
+                if (found.size() < candidates + UniformGrid::kPadding) found.resize(2 * candidates + UniformGrid::kPadding);
+                Index* dst = found.data();
                 Index c = 0;
-                grid.for_each_candidate_range(xi, [&](Index b, Index e) {
-                    if (found.size() < std::size_t(c) + (e - b)) found.resize(2 * (std::size_t(c) + (e - b)));
-                    Index* dst = found.data();
-                    for (Index k = b; k < e; ++k) {
-                        const Index j = sorted_index[k];
-                        const Vec3 d = xi - sorted_pos[k];
-                        dst[c] = j;
-                        c += Index(d.squaredNorm() < r2) & Index(!(exclude_self && j == i));
-                    }
-                });
+                if (simd) {
+                    c = filter_candidates_simd(grid, xi, exclude_self ? i : kNoSelf, r2, dst);
+                } else {
+                    // Branch-free scalar filter: every candidate is written and the cursor
+                    // advances only when it is in range, so the loop has no data-dependent
+                    // branch (the in-range test is a coin toss for about half the candidates
+                    // once the start lattice has become disordered).
+                    grid.for_each_candidate_range(xi, [&](Index b, Index e) {
+                        for (Index k = b; k < e; ++k) {
+                            const Index j = sorted_index[k];
+                            const Vec3 d = xi - Vec3(sx[k], sy[k], sz[k]);
+                            dst[c] = j;
+                            c += Index(d.squaredNorm() < r2) & Index(!(exclude_self && j == i));
+                        }
+                    });
+                }
                 std::copy_n(found.data(), std::min(c, cap), out);
                 lists.count[i] = c;
                 local_max = std::max(local_max, c);
@@ -116,7 +139,7 @@ void build_neighbour_lists(const UniformGrid& grid, std::span<const Vec3> query_
         lists.indices.clear();
         if (!subset.all) {
             // The other particles' lists must move to the new layout too: rebuild them all.
-            build_neighbour_lists(grid, query_positions, radius, exclude_self, QuerySubset{}, lists);
+            build_neighbour_lists(grid, query_positions, radius, exclude_self, QuerySubset{}, lists, simd);
             return;
         }
     }

@@ -23,8 +23,13 @@ public:
     UniformGrid(const Aabb& box, Real cell_size);
 
     /// @brief Sorts particle indices by cell (deterministically: ties by index) and gathers
-    /// their positions in that order. Parallel; O(N log N) with a nearly sorted input.
+    /// their coordinates in that order, one array per axis (what the vectorised filter loads).
+    /// Parallel; O(N log N) with a nearly sorted input.
     void build(std::span<const Vec3> positions);
+
+    /// Slots past the last particle that the sorted arrays carry (copies of a far point), so a
+    /// vectorised loop may load a whole vector from any slot below particle_count().
+    static constexpr std::size_t kPadding = 16;
 
     Eigen::Vector3i cell_coords(const Vec3& x) const {
         Eigen::Vector3i c;
@@ -48,13 +53,13 @@ public:
             for (int y = std::max(c[1] - 1, 0); y <= std::min(c[1] + 1, m_dims[1] - 1); ++y) {
                 const std::int64_t row = cell_index({0, y, z});
                 const Index b = m_cell_start[row + x0], e = m_cell_start[row + x1 + 1];
-                for (Index k = b; k < e; ++k) fn(m_sorted_index[k], m_sorted_pos[k]);
+                for (Index k = b; k < e; ++k) fn(m_sorted_index[k], Vec3(m_sx[k], m_sy[k], m_sz[k]));
             }
     }
 
     /// @brief Calls fn(begin, end) for the 9 contiguous ranges of sorted slots that hold the 27
     /// cells around x (the same candidates, in the same order, as for_each_candidate); the
-    /// slots index sorted_index() and sorted_positions().
+    /// slots index sorted_index() and sorted_x/y/z().
     template <class Fn>
     void for_each_candidate_range(const Vec3& x, Fn&& fn) const {
         const Eigen::Vector3i c = cell_coords(x);
@@ -65,13 +70,17 @@ public:
                 fn(m_cell_start[row + x0], m_cell_start[row + x1 + 1]);
             }
     }
-    std::span<const Index> sorted_index() const { return m_sorted_index; }
-    std::span<const Vec3> sorted_positions() const { return m_sorted_pos; }
+    /// Particle index by sorted slot (particle_count() entries; kPadding readable ones follow).
+    std::span<const Index> sorted_index() const { return {m_sorted_index.data(), m_count}; }
+    /// Coordinates by sorted slot, one array per axis; kPadding readable slots follow the last.
+    const Real* sorted_x() const { return m_sx.data(); }
+    const Real* sorted_y() const { return m_sy.data(); }
+    const Real* sorted_z() const { return m_sz.data(); }
 
     const Eigen::Vector3i& dims() const { return m_dims; }
     Real cell_size() const { return m_cell; }
     std::size_t cell_count() const { return m_cell_start.empty() ? 0 : m_cell_start.size() - 1; }
-    std::size_t particle_count() const { return m_sorted_index.size(); }
+    std::size_t particle_count() const { return m_count; }
     std::size_t bytes() const;
 
 private:
@@ -80,8 +89,9 @@ private:
     Eigen::Vector3i m_dims{1, 1, 1};
     std::vector<std::uint64_t> m_keys;    ///< (cell << 32) | index, sorted
     std::vector<Index> m_cell_start;      ///< first sorted slot of each cell; size cells + 1
-    std::vector<Index> m_sorted_index;
-    std::vector<Vec3> m_sorted_pos;
+    std::size_t m_count = 0;
+    std::vector<Index> m_sorted_index;    ///< particle_count() + kPadding
+    std::vector<Real> m_sx, m_sy, m_sz;   ///< particle_count() + kPadding each
 };
 
 /// @brief Neighbour lists with a fixed capacity per query particle, so the lists of any
@@ -117,10 +127,12 @@ struct QuerySubset {
 
 /// @brief Builds the lists of the query particles against the particles of `grid`: every j
 /// with |x_i - x_j|^2 < radius^2, in the grid's sorted order, excluding j == i when
-/// `exclude_self` (query and grid are the same set). Equals brute force exactly.
+/// `exclude_self` (query and grid are the same set). Equals brute force exactly. `simd` takes
+/// the vectorised filter (neighbour_filter.hpp; float builds), else the scalar one: the same
+/// lists either way.
 void build_neighbour_lists(const UniformGrid& grid, std::span<const Vec3> query_positions,
                            Real radius, bool exclude_self, const QuerySubset& subset,
-                           NeighbourLists& lists);
+                           NeighbourLists& lists, bool simd);
 
 /// @brief Permutation that orders particles along the z-order (Morton) curve of their grid
 /// cells, ties broken by current index: new[i] = old[perm[i]].

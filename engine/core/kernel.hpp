@@ -18,6 +18,9 @@ public:
         m_grad_sigma = Real(48) / (std::numbers::pi_v<Real> * h3);
     }
     Real support() const { return m_h; }
+    Real inv_support() const { return m_inv_h; }
+    Real sigma() const { return m_sigma; }            ///< 8 / (pi h^3)
+    Real grad_sigma() const { return m_grad_sigma; }  ///< 48 / (pi h^3)
 
     /// @brief W(r) for a distance r >= 0.
     Real w(Real r) const {

@@ -94,6 +94,10 @@ struct SimulationParams {
     double scale = 1.0;          ///< particle-count multiplier: radius /= cbrt(scale).
     Vec3d gravity{0.0, -9.81, 0.0};  ///< m/s^2
     int sort_interval = 16;      ///< steps between z-order re-sorts of the particle columns.
+    /// Vectorised pair loops (neighbour filter, density, forces) at the widest instruction set
+    /// the CPU has (runtime dispatch: AVX-512, AVX2, else portable); false runs the scalar
+    /// reference loops. Float builds only: with SPH_DOUBLE the scalar loops always run.
+    bool simd = true;
 };
 
 struct FluidParams {

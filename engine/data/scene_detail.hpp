@@ -28,8 +28,8 @@ inline constexpr std::array<const char*, 7> k_emitter_keys{"position", "velocity
 inline constexpr std::array<const char*, 6> k_pcisph_keys{"iterations", "max_iterations", "loop",
                                                    "eta",        "eta_max",        "delta_shock"};
 inline constexpr std::array<const char*, 2> k_boundary_params_keys{"handling", "friction"};
-inline constexpr std::array<const char*, 7> k_simulation_keys{
-    "method", "stepping", "end_time", "frame_rate", "scale", "gravity", "sort_interval"};
+inline constexpr std::array<const char*, 8> k_simulation_keys{
+    "method", "stepping", "end_time", "frame_rate", "scale", "gravity", "sort_interval", "simd"};
 inline constexpr std::array<const char*, 9> k_stepping_keys{"mode",     "dt",       "lambda_v", "lambda_f", "acoustic",
                                                      "lambda_c", "dt_max",   "dt_min",   "activation"};
 inline constexpr std::array<const char*, 9> k_fluid_keys{"rest_density",        "particle_radius", "viscosity",

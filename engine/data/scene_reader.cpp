@@ -374,6 +374,10 @@ class Reader {
             }
             p.sort_interval = v->get<int>();
         }
+        if (const json* v = n.find("simd")) {
+            if (!v->is_boolean()) fail(child(n.path, "simd"), dump(*v), "true or false");
+            p.simd = v->get<bool>();
+        }
     }
 
     void read_stepping(const Node& n, SteppingParams& p) const {

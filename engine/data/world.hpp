@@ -33,6 +33,8 @@ struct Physics {
     Real boundary_viscosity = 0;  ///< Monaghan alpha against boundary particles (0: free-slip walls)
     Vec3 gravity = Vec3::Zero();
     double fluid_height = 0;  ///< m, used for the default c_s
+    /// Pair loops take the vectorised path (simulation.simd; never with SPH_DOUBLE).
+    bool simd = true;
 };
 
 /// @brief Simulated time is kept in integer ticks of 1 ps, so sums of steps and the activity

@@ -74,6 +74,11 @@ void derive_constants(World& w, const Scene& scene) {
     ph.viscosity = Real(scene.fluid.viscosity);
     ph.boundary_viscosity = Real(scene.fluid.boundary_viscosity.value_or(scene.fluid.viscosity));
     ph.gravity = scene.simulation.gravity.cast<Real>();
+#ifdef SPH_DOUBLE
+    ph.simd = false;  // the vectorised loops are float-only
+#else
+    ph.simd = scene.simulation.simd;
+#endif
     w.kernel = CubicSpline(ph.h);
     ph.mass = lattice_mass(w.kernel, ph.spacing, ph.rest_density);
     w.domain = scene.domain ? *scene.domain : default_domain(scene, double(ph.h));

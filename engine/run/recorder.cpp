@@ -10,6 +10,7 @@
 #include <iomanip>
 #include <sstream>
 
+#include "engine/core/simd.hpp"
 #include "engine/data/components.hpp"
 #include "engine/core/errors.hpp"
 #include "engine/graph/system.hpp"
@@ -226,6 +227,8 @@ nlohmann::json Recorder::finish(const Simulation& sim, double wall_seconds, int 
                           double(u.ru_stime.tv_sec) + 1e-6 * double(u.ru_stime.tv_usec);
     }
     j["threads"] = threads;
+    // The instruction set of the pair loops: the dispatched target, or "scalar" (simulation.simd).
+    j["simd"] = w.physics.simd ? simd_target() : std::string("scalar");
     const double fps = wall_seconds > 0 ? double(w.fluid.size()) * double(sim.steps()) / wall_seconds : 0.0;
     j["fluid_particle_steps_per_s"] = fps;
     j["avg_dt_s"] = sim.steps() ? sim.time() / double(sim.steps()) : 0.0;

@@ -10,6 +10,7 @@
 #include "engine/data/world.hpp"
 #include "engine/graph/context.hpp"
 #include "systems/density/density_kernels.hpp"
+#include "systems/density/density_simd.hpp"
 
 namespace sph {
 
@@ -50,8 +51,28 @@ void DensitySystem::run(Context& ctx) {
         rho[i] = self + ph.mass * sum + ph.rest_density * bsum;
         p[i] = tait_pressure(rho[i], ph.rest_density, ph.tait_b);
     };
+    // The vectorised loop (simulation.simd) computes the same sums; the scalar lambda above
+    // is the reference it is tested against.
+    DensityPairArgs simd;
+    if (ph.simd) {
+        simd.x = x.empty() ? nullptr : x.data()->data();
+        simd.fluid = &fluid_nb;
+        if (has_boundary) {
+            simd.xb = xb.data()->data();
+            simd.volume_b = vb.data();
+            simd.boundary = boundary_nb;
+        }
+        simd.kernel = &kernel;
+        simd.self = self;
+        simd.mass = ph.mass;
+        simd.rest_density = ph.rest_density;
+        simd.tait_b = ph.tait_b;
+        simd.rho = rho.data();
+        simd.pressure = p.data();
+    }
     if (!m_individual) {
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 512), [&](const auto& r) {
+            if (ph.simd) return density_rows_simd(simd, nullptr, r.begin(), r.end());
             for (std::size_t i = r.begin(); i < r.end(); ++i) summation(Index(i));
         });
         return;
@@ -61,7 +82,9 @@ void DensitySystem::run(Context& ctx) {
     // asynchronous integration applies to every particle at the end of each step.
     const auto& active = ctx.read(res::active_set);
     auto rho_last = ctx.write(fluid(comp::density_last));
+    simd.rho_last = rho_last.data();
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, active.size(), 256), [&](const auto& r) {
+        if (ph.simd) return density_rows_simd(simd, active.data(), r.begin(), r.end());
         for (std::size_t k = r.begin(); k < r.end(); ++k) {
             summation(active[k]);
             rho_last[active[k]] = rho[active[k]];

@@ -24,6 +24,7 @@
 #include "engine/data/world.hpp"
 #include "engine/graph/context.hpp"
 #include "systems/forces/forces_kernels.hpp"
+#include "systems/forces/forces_simd.hpp"
 #include "systems/timestep/global_dt_system.hpp"
 
 namespace sph {
@@ -122,8 +123,36 @@ void ForcesSystem::run(Context& ctx) {
                                          std::sqrt(double(acc[i].squaredNorm())));
         }
     };
+    // The vectorised loop (simulation.simd) for the symmetric gradient; the scalar lambda
+    // above is the reference it is tested against, and runs the corrected form.
+    const bool simd = ph.simd && !m_corrected;
+    ForcePairArgs vec;
+    if (simd) {
+        vec.x = x.empty() ? nullptr : x.data()->data();
+        vec.v = v.empty() ? nullptr : v.data()->data();
+        vec.rho = rho.data();
+        vec.p = p.data();
+        vec.fluid = &fluid_nb;
+        if (has_boundary) {
+            vec.xb = xb.data()->data();
+            vec.volume_b = vb.data();
+            vec.vel_b = moving ? vel_b.data()->data() : nullptr;
+            vec.boundary = boundary_nb;
+        }
+        vec.kernel = &kernel;
+        vec.mass = m;
+        vec.alpha = alpha;
+        vec.alpha_b = alpha_b;
+        vec.speed_of_sound = c;
+        vec.h = h;
+        vec.rest_density = rho0;
+        for (int k = 0; k < 3; ++k) vec.gravity[k] = g[k];
+        vec.acc = acc.empty() ? nullptr : acc.data()->data();
+        vec.drho = m_individual ? drho.data() : nullptr;
+    }
     if (!m_individual) {
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 256), [&](const auto& r) {
+            if (simd) return force_rows_simd(vec, nullptr, r.begin(), r.end());
             for (std::size_t i = r.begin(); i < r.end(); ++i) {
                 if (m_corrected)
                     evaluate.template operator()<false, true>(Index(i));
@@ -141,12 +170,17 @@ void ForcesSystem::run(Context& ctx) {
     ctx.write(counter::force_evaluations) = tbb::parallel_reduce(
         tbb::blocked_range<std::size_t>(0, active.size(), 128), std::uint64_t(0),
         [&](const auto& r, std::uint64_t done) {
+            if (simd) force_rows_simd(vec, active.data(), r.begin(), r.end());
             for (std::size_t k = r.begin(); k < r.end(); ++k) {
-                if (m_corrected)
-                    evaluate.template operator()<true, true>(active[k]);
+                const Index i = active[k];
+                if (simd)  // He Alg. 2 line 13 on the vectorised loop's a_i
+                    dt_raw[i] = global_time_step(stepping, h, c, std::sqrt(double(v[i].squaredNorm())),
+                                                 std::sqrt(double(acc[i].squaredNorm())));
+                else if (m_corrected)
+                    evaluate.template operator()<true, true>(i);
                 else
-                    evaluate.template operator()<true, false>(active[k]);
-                t_last[active[k]] = now;
+                    evaluate.template operator()<true, false>(i);
+                t_last[i] = now;
                 ++done;
             }
             return done;

@@ -22,7 +22,7 @@ Access BoundaryNeighbourSystem::access() const {
 }
 void BoundaryNeighbourSystem::run(Context& ctx) {
     build_neighbour_lists(ctx.read(res::boundary_grid), ctx.read(fluid(comp::position)), ctx.physics().h, false,
-                          subset_of(ctx, m_individual), ctx.write(res::boundary_neighbours));
+                          subset_of(ctx, m_individual), ctx.write(res::boundary_neighbours), ctx.physics().simd);
 }
 
 }  // namespace sph

@@ -24,7 +24,7 @@ Access FluidNeighbourSystem::access() const {
 void FluidNeighbourSystem::run(Context& ctx) {
     const QuerySubset subset = subset_of(ctx, m_individual);
     build_neighbour_lists(ctx.read(res::fluid_grid), ctx.read(fluid(comp::position)), ctx.physics().h, true, subset,
-                          ctx.write(res::fluid_neighbours));
+                          ctx.write(res::fluid_neighbours), ctx.physics().simd);
     ctx.write(counter::neighbour_searches) = subset.all ? ctx.size(SetId::Fluid) : subset.indices.size();
 }
 

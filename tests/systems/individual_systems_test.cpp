@@ -32,8 +32,9 @@ struct Harness {
     Recipe recipe;
     std::map<std::string, System*> by_name;
 
-    explicit Harness(std::uint32_t seed) {
+    Harness(std::uint32_t seed, bool simd) {
         Scene s = test::tank_scene(Vec3d(0.16, 0.2, 0.1), Vec3d(0.3, 0.3, 0.1));
+        s.simulation.simd = simd;
         s.fluid.viscosity = 0.1;
         s.simulation.stepping.mode = SteppingMode::Individual;
         s.simulation.stepping.lambda_v = 0.05;
@@ -76,9 +77,9 @@ std::vector<Index> sorted(std::span<const Index> s) {
     return v;
 }
 
-void check_fraction(double fraction) {
-    SCOPED_TRACE("active fraction " + std::to_string(fraction));
-    Harness H(7);
+void check_fraction(double fraction, bool simd) {
+    SCOPED_TRACE("active fraction " + std::to_string(fraction) + (simd ? ", vectorised loops" : ", scalar loops"));
+    Harness H(7, simd);
     World& w = H.w;
     const std::size_t n = w.fluid.size();
     ASSERT_GT(n, 300u);
@@ -281,7 +282,8 @@ void check_fraction(double fraction) {
 
 }  // namespace
 
-TEST(IndividualSystems, AllActiveMatchesBruteForce) { check_fraction(1.0); }
-TEST(IndividualSystems, HalfActiveMatchesBruteForce) { check_fraction(0.5); }
-TEST(IndividualSystems, TenPercentActiveMatchesBruteForce) { check_fraction(0.1); }
-TEST(IndividualSystems, NoneActiveMatchesBruteForce) { check_fraction(0.0); }
+// Each on the vectorised pair loops (simulation.simd) and on the scalar reference loops.
+TEST(IndividualSystems, AllActiveMatchesBruteForce) { for (bool simd : {true, false}) check_fraction(1.0, simd); }
+TEST(IndividualSystems, HalfActiveMatchesBruteForce) { for (bool simd : {true, false}) check_fraction(0.5, simd); }
+TEST(IndividualSystems, TenPercentActiveMatchesBruteForce) { for (bool simd : {true, false}) check_fraction(0.1, simd); }
+TEST(IndividualSystems, NoneActiveMatchesBruteForce) { for (bool simd : {true, false}) check_fraction(0.0, simd); }

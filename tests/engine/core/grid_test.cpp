@@ -48,59 +48,94 @@ void expect_equal_to_brute(const UniformGrid& grid, std::span<const Vec3> q, std
 }  // namespace
 
 TEST(NeighbourSearch, EqualsBruteForceOnRandomCloud) {
-    const Real h = 0.07f;
-    auto pts = cloud(3000, h, 1);
-    UniformGrid grid(Aabb{Vec3d(-1, -1, -1), Vec3d(0.5, 0.5, 0.5)}, h);
-    grid.build(pts);
-    NeighbourLists lists;
-    build_neighbour_lists(grid, pts, h, true, QuerySubset{}, lists);
-    std::vector<Index> all(pts.size());
-    for (Index i = 0; i < all.size(); ++i) all[i] = i;
-    expect_equal_to_brute(grid, pts, pts, h, true, lists, all);
+    // Both filters, the vectorised one (simulation.simd) and the scalar reference.
+    for (const bool simd : {false, true}) {
+        SCOPED_TRACE(simd ? "vectorised filter" : "scalar filter");
+        const Real h = 0.07f;
+        auto pts = cloud(3000, h, 1);
+        UniformGrid grid(Aabb{Vec3d(-1, -1, -1), Vec3d(0.5, 0.5, 0.5)}, h);
+        grid.build(pts);
+        NeighbourLists lists;
+        build_neighbour_lists(grid, pts, h, true, QuerySubset{}, lists, simd);
+        std::vector<Index> all(pts.size());
+        for (Index i = 0; i < all.size(); ++i) all[i] = i;
+        expect_equal_to_brute(grid, pts, pts, h, true, lists, all);
+    }
 }
 
 TEST(NeighbourSearch, CrossSetQueriesIncludeEveryMatch) {
-    const Real h = 0.1f;
-    auto pts = cloud(2000, h, 2);
-    auto q = cloud(500, h, 3);
-    UniformGrid grid(Aabb{Vec3d(-1, -1, -1), Vec3d(0.5, 0.5, 0.5)}, h);
-    grid.build(pts);
-    NeighbourLists lists;
-    build_neighbour_lists(grid, q, h, false, QuerySubset{}, lists);
-    for (Index i = 0; i < q.size(); ++i) {
-        auto got = std::vector<Index>(lists.of(i).begin(), lists.of(i).end());
-        std::sort(got.begin(), got.end());
-        std::vector<Index> expect;
-        for (Index j = 0; j < pts.size(); ++j)
-            if ((q[i] - pts[j]).squaredNorm() < h * h) expect.push_back(j);
-        EXPECT_EQ(got, expect) << "query " << i;
+    // Both filters, the vectorised one (simulation.simd) and the scalar reference.
+    for (const bool simd : {false, true}) {
+        SCOPED_TRACE(simd ? "vectorised filter" : "scalar filter");
+        const Real h = 0.1f;
+        auto pts = cloud(2000, h, 2);
+        auto q = cloud(500, h, 3);
+        UniformGrid grid(Aabb{Vec3d(-1, -1, -1), Vec3d(0.5, 0.5, 0.5)}, h);
+        grid.build(pts);
+        NeighbourLists lists;
+        build_neighbour_lists(grid, q, h, false, QuerySubset{}, lists, simd);
+        for (Index i = 0; i < q.size(); ++i) {
+            auto got = std::vector<Index>(lists.of(i).begin(), lists.of(i).end());
+            std::sort(got.begin(), got.end());
+            std::vector<Index> expect;
+            for (Index j = 0; j < pts.size(); ++j)
+                if ((q[i] - pts[j]).squaredNorm() < h * h) expect.push_back(j);
+            EXPECT_EQ(got, expect) << "query " << i;
+        }
     }
 }
 
 // A subset rebuild touches only the subset; a dense cluster forces the capacity to grow and
 // every list to be rebuilt in the new layout.
 TEST(NeighbourSearch, SubsetRebuildAndCapacityGrowth) {
-    const Real h = 0.1f;
-    auto pts = cloud(1500, h, 4);
+    // Both filters, the vectorised one (simulation.simd) and the scalar reference.
+    for (const bool simd : {false, true}) {
+        SCOPED_TRACE(simd ? "vectorised filter" : "scalar filter");
+        const Real h = 0.1f;
+        auto pts = cloud(1500, h, 4);
+        UniformGrid grid(Aabb{Vec3d(-1, -1, -1), Vec3d(0.5, 0.5, 0.5)}, h);
+        grid.build(pts);
+        NeighbourLists lists;
+        build_neighbour_lists(grid, pts, h, true, QuerySubset{}, lists, simd);
+        // Move a few particles into one dense clump, then rebuild only them.
+        std::vector<Index> moved;
+        for (Index i = 0; i < 120; ++i) {
+            pts[i * 10] = Vec3(0.2f + 0.0001f * i, 0.2f, 0.2f);
+            moved.push_back(i * 10);
+        }
+        grid.build(pts);
+        const Index cap_before = lists.capacity;
+        build_neighbour_lists(grid, pts, h, true, QuerySubset{moved, false}, lists, simd);
+        EXPECT_GT(lists.capacity, cap_before);
+        expect_equal_to_brute(grid, pts, pts, h, true, lists, moved);
+        // After growth every list was rebuilt, so all match brute force for the new positions.
+        std::vector<Index> all(pts.size());
+        for (Index i = 0; i < all.size(); ++i) all[i] = i;
+        expect_equal_to_brute(grid, pts, pts, h, true, lists, all);
+    }
+}
+
+// The vectorised filter writes the same lists in the same order as the scalar one (the
+// density and force sums then add the same terms in the same order), with and without the
+// self-exclusion, across a capacity growth.
+TEST(NeighbourSearch, VectorisedFilterEqualsScalarInOrder) {
+    const Real h = 0.07f;
+    auto pts = cloud(4000, h, 7);
+    for (Index i = 0; i < 200; ++i) pts[i * 7] = Vec3(0.1f + 0.00005f * i, 0.1f, 0.1f);  // a clump: growth
     UniformGrid grid(Aabb{Vec3d(-1, -1, -1), Vec3d(0.5, 0.5, 0.5)}, h);
     grid.build(pts);
-    NeighbourLists lists;
-    build_neighbour_lists(grid, pts, h, true, QuerySubset{}, lists);
-    // Move a few particles into one dense clump, then rebuild only them.
-    std::vector<Index> moved;
-    for (Index i = 0; i < 120; ++i) {
-        pts[i * 10] = Vec3(0.2f + 0.0001f * i, 0.2f, 0.2f);
-        moved.push_back(i * 10);
+    for (const bool self : {true, false}) {
+        NeighbourLists scalar, vectorised;
+        build_neighbour_lists(grid, pts, h, self, QuerySubset{}, scalar, false);
+        build_neighbour_lists(grid, pts, h, self, QuerySubset{}, vectorised, true);
+        ASSERT_EQ(scalar.capacity, vectorised.capacity);
+        EXPECT_GT(scalar.capacity, 48u);  // the clump grew the lists
+        for (Index i = 0; i < pts.size(); ++i) {
+            const auto a = scalar.of(i), b = vectorised.of(i);
+            ASSERT_EQ(std::vector<Index>(a.begin(), a.end()), std::vector<Index>(b.begin(), b.end()))
+                << "particle " << i << (self ? " (self excluded)" : "");
+        }
     }
-    grid.build(pts);
-    const Index cap_before = lists.capacity;
-    build_neighbour_lists(grid, pts, h, true, QuerySubset{moved, false}, lists);
-    EXPECT_GT(lists.capacity, cap_before);
-    expect_equal_to_brute(grid, pts, pts, h, true, lists, moved);
-    // After growth every list was rebuilt, so all match brute force for the new positions.
-    std::vector<Index> all(pts.size());
-    for (Index i = 0; i < all.size(); ++i) all[i] = i;
-    expect_equal_to_brute(grid, pts, pts, h, true, lists, all);
 }
 
 TEST(NeighbourSearch, ZOrderPermutationIsAPermutation) {

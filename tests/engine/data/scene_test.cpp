@@ -347,7 +347,7 @@ TEST(SceneLoader, InvalidOverrideSaysItWasSetOnTheCommandLine) {
                   parse_scene(k_minimal, "m.json", {{"/simulation/endtime", 2}});
               }),
               "m.json: /simulation: found unknown key \"endtime\", expected one of: method, "
-              "stepping, end_time, frame_rate, scale, gravity, sort_interval (did you mean "
+              "stepping, end_time, frame_rate, scale, gravity, sort_interval, simd (did you mean "
               "\"end_time\"?) (set on the command line)");
     // The error is reported at dt_min, but the override of dt_max caused it.
     EXPECT_EQ(error_of([] {

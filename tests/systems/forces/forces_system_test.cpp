@@ -3,7 +3,8 @@
 // Akinci eq. 6), and forces (He eq. 4 with Monaghan viscosity and Akinci boundary forces).
 // The fluid is a jittered block in a container, so sums are not lattice-symmetric. Run at the
 // default kernel support (2 spacings, about 30 neighbours) and at fluid.support = 3 (about 110:
-// the neighbour lists outgrow their first capacity of 48 and are rebuilt).
+// the neighbour lists outgrow their first capacity of 48 and are rebuilt), on the vectorised
+// pair loops (simulation.simd, the default) and on the scalar reference loops.
 #include <gtest/gtest.h>
 
 #include <random>
@@ -26,10 +27,11 @@ namespace {
 
 struct Fixture {
     World w;
-    explicit Fixture(double support) {
+    Fixture(double support, bool simd) {
         Scene s = test::tank_scene(Vec3d(0.16, 0.2, 0.1), Vec3d(0.3, 0.3, 0.1));
         s.fluid.viscosity = 0.1;
         s.fluid.support = support;
+        s.simulation.simd = simd;
         initialise_world(w, s);
         // Jitter and give random velocities so that every term is exercised.
         std::mt19937 rng(11);
@@ -56,14 +58,19 @@ struct Fixture {
     }
 };
 
-class BruteForce : public ::testing::TestWithParam<double> {};
+class BruteForce : public ::testing::TestWithParam<std::tuple<double, bool>> {
+protected:
+    double support() const { return std::get<0>(GetParam()); }
+    bool simd() const { return std::get<1>(GetParam()); }
+};
 
 }  // namespace
 
 TEST_P(BruteForce, BoundaryVolumeDensityAndForces) {
-    Fixture f(GetParam());
+    Fixture f(support(), simd());
     const World& w = f.w;
-    ASSERT_FLOAT_EQ(w.physics.h, float(GetParam() * 2 * w.physics.particle_radius));
+    ASSERT_FLOAT_EQ(w.physics.h, float(support() * 2 * w.physics.particle_radius));
+    ASSERT_EQ(w.physics.simd, simd());
     const auto x = w.fluid.store.get(comp::position);
     const auto v = w.fluid.store.get(comp::velocity);
     const auto xb = w.boundary.store.get(comp::position);
@@ -140,7 +147,7 @@ TEST_P(BruteForce, BoundaryVolumeDensityAndForces) {
 TEST_P(BruteForce, LatticeMassGivesRestDensityInside) {
     World w;
     Scene s = test::tank_scene(Vec3d(0.2, 0.2, 0.2), Vec3d(0.3, 0.3, 0.3));
-    s.fluid.support = GetParam();
+    s.fluid.support = support();
     initialise_world(w, s);
     const auto x = w.fluid.store.get(comp::position);
     const Vec3 centre(0.1f, 0.1f, 0.1f);
@@ -155,5 +162,8 @@ TEST_P(BruteForce, LatticeMassGivesRestDensityInside) {
     EXPECT_GT(inner, 0u);
 }
 
-INSTANTIATE_TEST_SUITE_P(Support, BruteForce, ::testing::Values(2.0, 3.0),
-                         [](const auto& info) { return info.param == 2.0 ? "default2" : "wide3"; });
+INSTANTIATE_TEST_SUITE_P(Support, BruteForce, ::testing::Combine(::testing::Values(2.0, 3.0), ::testing::Bool()),
+                         [](const auto& info) {
+                             return std::string(std::get<0>(info.param) == 2.0 ? "default2" : "wide3") +
+                                    (std::get<1>(info.param) ? "_simd" : "_scalar");
+                         });

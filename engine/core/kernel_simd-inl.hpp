@@ -1,0 +1,81 @@
+// The cubic spline of kernel.hpp (Monaghan 1992, support h) on Highway vectors: the same
+// formulas in the same order, a whole vector of pairs at a time. Included inside the
+// HWY_NAMESPACE of a Highway translation unit (once per compiled target), hence the toggle
+// guard instead of #pragma once.
+#if defined(SPH_KERNEL_SIMD_INL_HPP_) == defined(HWY_TARGET_TOGGLE)
+#ifdef SPH_KERNEL_SIMD_INL_HPP_
+#undef SPH_KERNEL_SIMD_INL_HPP_
+#else
+#define SPH_KERNEL_SIMD_INL_HPP_
+#endif
+
+#include <hwy/highway.h>
+
+#include "engine/core/kernel.hpp"
+
+HWY_BEFORE_NAMESPACE();
+namespace sph {
+namespace HWY_NAMESPACE {
+namespace hn = hwy::HWY_NAMESPACE;
+
+/// @brief The kernel's constants broadcast to vectors.
+template <class D>
+struct KernelV {
+    using V = hn::Vec<D>;
+    V inv_h, sigma, grad_sigma, r_min, half, one, two, three, six;
+    KernelV(D d, const CubicSpline& k)
+        : inv_h(hn::Set(d, k.inv_support())), sigma(hn::Set(d, k.sigma())), grad_sigma(hn::Set(d, k.grad_sigma())),
+          r_min(hn::Set(d, Real(1e-9) * k.support())), half(hn::Set(d, Real(0.5))), one(hn::Set(d, Real(1))),
+          two(hn::Set(d, Real(2))), three(hn::Set(d, Real(3))), six(hn::Set(d, Real(6))) {}
+
+    /// W(r) (CubicSpline::w), zero for r >= h.
+    V w(D d, V r) const {
+        const V q = hn::Mul(r, inv_h);
+        const V q2 = hn::Mul(q, q);
+        const V inner = hn::Mul(sigma, hn::Add(hn::Mul(six, hn::Sub(hn::Mul(q2, q), q2)), one));
+        const V f = hn::Sub(one, q);
+        const V outer = hn::Mul(hn::Mul(hn::Mul(hn::Mul(sigma, two), f), f), f);
+        const V w = hn::IfThenElse(hn::Le(q, half), inner, outer);
+        return hn::IfThenElseZero(hn::Lt(q, one), w);
+    }
+
+    /// The factor s with grad W = x_ij s (CubicSpline::grad); zero for r >= h and r ~ 0.
+    V grad_factor(D d, V r) const {
+        const V q = hn::Mul(r, inv_h);
+        const V f = hn::Sub(one, q);
+        const V dwdq = hn::IfThenElse(hn::Le(q, half), hn::Mul(q, hn::Sub(hn::Mul(three, q), two)),
+                                      hn::Neg(hn::Mul(f, f)));
+        const auto valid = hn::And(hn::Lt(q, one), hn::Gt(r, r_min));
+        // r is replaced by 1 where invalid, so no lane divides by zero.
+        const V safe_r = hn::IfThenElse(valid, r, one);
+        return hn::IfThenElseZero(valid, hn::Div(hn::Mul(hn::Mul(grad_sigma, dwdq), inv_h), safe_r));
+    }
+};
+
+/// @brief |d|^2 summed as Eigen's squaredNorm does, ((x^2 + y^2) + z^2).
+template <class V>
+HWY_INLINE V norm2(V dx, V dy, V dz) {
+    return hn::Add(hn::Add(hn::Mul(dx, dx), hn::Mul(dy, dy)), hn::Mul(dz, dz));
+}
+
+/// @brief a . b summed in the same order, ((ax bx + ay by) + az bz).
+template <class V>
+HWY_INLINE V dot3(V ax, V ay, V az, V bx, V by, V bz) {
+    return hn::Add(hn::Add(hn::Mul(ax, bx), hn::Mul(ay, by)), hn::Mul(az, bz));
+}
+
+/// @brief Loads the neighbour indices [k, k + lanes) of a list of `count` entries, lanes at
+/// or past `count` set to 0 (a valid row whose contribution the caller masks off).
+/// @warning The list must be readable up to k + lanes (NeighbourLists' capacity is a
+/// multiple of 16).
+template <class DI>
+HWY_INLINE hn::Vec<DI> load_neighbours(DI di, const Index* list, std::size_t k, std::size_t count, hn::Mask<DI>& in) {
+    in = hn::FirstN(di, count - k);
+    return hn::IfThenElseZero(in, hn::LoadU(di, reinterpret_cast<const std::int32_t*>(list) + k));
+}
+
+}  // namespace HWY_NAMESPACE
+}  // namespace sph
+HWY_AFTER_NAMESPACE();
+
+#endif  // SPH_KERNEL_SIMD_INL_HPP_

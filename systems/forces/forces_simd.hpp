@@ -1,0 +1,35 @@
+#pragma once
+/// @file forces_simd.hpp
+/// @brief The vectorised force loop (forces_simd.cpp): He et al. eq. 4 with Monaghan's
+/// artificial viscosity, the Akinci et al. 2012 boundary terms and He eq. 5's drho/dt, for a
+/// range of rows, with the formulas of ForcesSystem's scalar loop (the symmetric pressure
+/// gradient; the corrected form runs the scalar loop).
+#include <cstddef>
+
+#include "engine/core/grid.hpp"
+#include "engine/core/kernel.hpp"
+#include "engine/core/types.hpp"
+
+namespace sph {
+
+struct ForcePairArgs {
+    const Real* x = nullptr;    ///< fluid positions, xyz per particle
+    const Real* v = nullptr;    ///< fluid velocities, xyz per particle
+    const Real* rho = nullptr;
+    const Real* p = nullptr;
+    const NeighbourLists* fluid = nullptr;
+    const Real* xb = nullptr;        ///< boundary positions (nullptr: no boundary terms)
+    const Real* volume_b = nullptr;
+    const Real* vel_b = nullptr;     ///< boundary velocities, xyz (nullptr: static walls)
+    const NeighbourLists* boundary = nullptr;
+    const CubicSpline* kernel = nullptr;
+    Real mass = 0, alpha = 0, alpha_b = 0, speed_of_sound = 0, h = 0, rest_density = 0;
+    Real gravity[3] = {0, 0, 0};
+    Real* acc = nullptr;   ///< written: a_i (xyz per particle), gravity included
+    Real* drho = nullptr;  ///< written when not null: drho_i/dt (He eq. 5)
+};
+
+/// @brief a_i (and drho_i/dt) of rows[k] (or of row k when rows is null), k in [begin, end).
+void force_rows_simd(const ForcePairArgs& a, const Index* rows, std::size_t begin, std::size_t end);
+
+}  // namespace sph
