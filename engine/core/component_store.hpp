@@ -124,6 +124,11 @@ public:
     /// @brief Applies one permutation to every registered column (new[i] = old[perm[i]]).
     /// Columns are independent, so they are permuted in parallel.
     void permute(std::span<const Index> perm);
+    /// @brief Bytes held by one column (0 when it is not registered).
+    std::size_t bytes(std::string_view name) const {
+        const auto it = m_columns.find(name);
+        return it == m_columns.end() ? 0 : it->second->bytes();
+    }
     /// @brief Bytes held by all columns.
     std::size_t bytes() const {
         std::size_t b = 0;

@@ -9,6 +9,7 @@
 
 #include <atomic>
 #include <limits>
+#include <stdexcept>
 
 namespace sph {
 
@@ -22,48 +23,48 @@ UniformGrid::UniformGrid(const Aabb& box, Real cell_size) : m_cell(cell_size), m
 }
 
 std::size_t UniformGrid::bytes() const {
-    return m_keys.capacity() * sizeof(std::uint64_t) + m_cell_start.capacity() * sizeof(Index) +
+    return m_cell_start.capacity() * sizeof(Index) +
            m_sorted_index.capacity() * sizeof(Index) + 3 * m_sx.capacity() * sizeof(Real);
 }
 
 void UniformGrid::build(std::span<const Vec3> positions) {
     const std::size_t n = positions.size();
-    m_keys.resize(n);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const auto& r) {
-        for (std::size_t i = r.begin(); i < r.end(); ++i)
-            m_keys[i] = (std::uint64_t(cell_index(cell_coords(positions[i]))) << 32) | i;
-    });
-    // Keys are unique, so the order is deterministic whatever the thread count.
-    tbb::parallel_sort(m_keys.begin(), m_keys.end());
+    const std::size_t cells = cell_count();
     m_count = n;
+    std::vector<Index> cell_of(n);  // scratch: not kept between builds
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const auto& r) {
+        for (std::size_t i = r.begin(); i < r.end(); ++i) cell_of[i] = Index(cell_index(cell_coords(positions[i])));
+    });
+    // Counting sort: particles per cell, their prefix sums (the first slot of each cell), then
+    // each particle in index order to the next free slot of its cell (so ties keep index order).
+    std::fill(m_cell_start.begin(), m_cell_start.end(), Index(0));
+    for (std::size_t i = 0; i < n; ++i) ++m_cell_start[cell_of[i] + 1];
+    for (std::size_t c = 1; c <= cells; ++c) m_cell_start[c] += m_cell_start[c - 1];
     m_sorted_index.resize(n + kPadding, 0);
+    for (std::size_t i = 0; i < n; ++i) m_sorted_index[m_cell_start[cell_of[i]]++] = Index(i);
+    // The scatter advanced each cell's start to its end (the next cell's start): shift back.
+    std::copy_backward(m_cell_start.begin(), m_cell_start.begin() + std::ptrdiff_t(cells), m_cell_start.end());
+    m_cell_start[0] = 0;
     // The padding slots hold a point far outside every query's range, so a whole vector
     // loaded at the end of the last range filters them out.
-    m_sx.resize(n + kPadding, std::numeric_limits<Real>::max());
-    m_sy.resize(n + kPadding, std::numeric_limits<Real>::max());
-    m_sz.resize(n + kPadding, std::numeric_limits<Real>::max());
-    std::fill(m_sx.begin() + n, m_sx.end(), std::numeric_limits<Real>::max());
-    std::fill(m_sy.begin() + n, m_sy.end(), std::numeric_limits<Real>::max());
-    std::fill(m_sz.begin() + n, m_sz.end(), std::numeric_limits<Real>::max());
-    const std::size_t cells = cell_count();
-    // cell_start[c] = first sorted slot whose cell >= c, for every c (empty cells included),
-    // so that a row of cells is one contiguous range.
+    for (auto* axis : {&m_sx, &m_sy, &m_sz}) {
+        axis->resize(n + kPadding);
+        std::fill(axis->begin() + std::ptrdiff_t(n), axis->end(), std::numeric_limits<Real>::max());
+    }
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const auto& r) {
         for (std::size_t k = r.begin(); k < r.end(); ++k) {
-            const Index i = Index(m_keys[k] & 0xffffffffu);
-            m_sorted_index[k] = i;
-            m_sx[k] = positions[i].x();
-            m_sy[k] = positions[i].y();
-            m_sz[k] = positions[i].z();
-            const std::uint64_t c = m_keys[k] >> 32;
-            const std::uint64_t prev = k == 0 ? 0 : (m_keys[k - 1] >> 32) + 1;
-            for (std::uint64_t cc = prev; cc <= c; ++cc) m_cell_start[cc] = Index(k);
+            const Vec3& x = positions[m_sorted_index[k]];
+            m_sx[k] = x.x();
+            m_sy[k] = x.y();
+            m_sz[k] = x.z();
         }
     });
-    const std::uint64_t last = n == 0 ? 0 : (m_keys[n - 1] >> 32) + 1;
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(last, cells + 1, 16384), [&](const auto& r) {
-        for (std::size_t c = r.begin(); c < r.end(); ++c) m_cell_start[c] = Index(n);
-    });
+}
+
+std::size_t NeighbourLists::bytes() const {
+    std::size_t b = (count.capacity() + indices.capacity() + start.capacity()) * sizeof(Index);
+    for (const auto& block : blocks) b += block.capacity() * sizeof(Index);
+    return b;
 }
 
 std::size_t NeighbourLists::total() const {
@@ -76,24 +77,99 @@ std::size_t NeighbourLists::total() const {
         std::plus<>());
 }
 
-void build_neighbour_lists(const UniformGrid& grid, std::span<const Vec3> query_positions,
-                           Real radius, bool exclude_self, const QuerySubset& subset,
-                           NeighbourLists& lists, bool simd) {
+namespace {
+
+constexpr Index kNoSelf = ~Index(0);
+
+/// Writes the candidates within r2 of xi (j != self) to dst; returns their count. Branch-free:
+/// every candidate is written and the cursor advances only when it is in range (the in-range
+/// test is a coin toss for about half the candidates once the start lattice has become
+/// disordered, and a branch mispredicts on it).
+Index filter_scalar(const UniformGrid& grid, const CandidateRanges& ranges, const Vec3& xi, Index self, Real r2,
+                    Index* dst) {
+    const Index* sorted_index = grid.sorted_index().data();
+    const Real *sx = grid.sorted_x(), *sy = grid.sorted_y(), *sz = grid.sorted_z();
+    Index c = 0;
+    for (int r = 0; r < ranges.count; ++r)
+        for (Index k = ranges.begin[r]; k < ranges.end[r]; ++k) {
+            const Index j = sorted_index[k];
+            dst[c] = j;
+            c += Index((xi - Vec3(sx[k], sy[k], sz[k])).squaredNorm() < r2) & Index(j != self);
+        }
+    return c;
+}
+
+Index filter(const UniformGrid& grid, const CandidateRanges& ranges, const Vec3& xi, Index self, Real r2, Index* dst,
+             bool simd) {
+    return simd ? filter_candidates_simd(grid, ranges, xi, self, r2, dst) : filter_scalar(grid, ranges, xi, self, r2, dst);
+}
+
+/// Every list, back to back per block of query particles, written straight into the block
+/// (no copy): a block grows when its next query's candidates might not fit.
+void build_compact(const UniformGrid& grid, std::span<const Vec3> query_positions, Real r2, bool exclude_self,
+                   NeighbourLists& lists, bool simd) {
     const std::size_t n = query_positions.size();
-    const Real r2 = radius * radius;
+    constexpr std::size_t B = NeighbourLists::kBlock;
+    lists.capacity = 0;
+    std::vector<Index>().swap(lists.indices);
+    lists.count.resize(n);
+    lists.start.resize(n);
+    lists.blocks.resize((n + B - 1) / B);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, lists.blocks.size(), 1), [&](const auto& r) {
+        for (std::size_t b = r.begin(); b < r.end(); ++b) {
+            std::vector<Index>& buf = lists.blocks[b];
+            std::size_t used = 0;
+            for (std::size_t i = b * B; i < std::min(n, (b + 1) * B); ++i) {
+                const Vec3 xi = query_positions[i];
+                const CandidateRanges ranges = grid.candidate_ranges(xi);
+                // Room for every candidate plus a vector of slack (the vectorised filter's
+                // whole-vector stores, and the readers' whole-vector loads).
+                const std::size_t need = used + ranges.total + NeighbourLists::kSlack;
+                if (buf.size() < need) {  // grows by an eighth: a block's lists change little per step
+                    buf.reserve(std::max(need, buf.size() + buf.size() / 8));
+                    buf.resize(buf.capacity());
+                }
+                const Index c = filter(grid, ranges, xi, exclude_self ? Index(i) : kNoSelf, r2, buf.data() + used, simd);
+                lists.start[i] = Index(used);
+                lists.count[i] = c;
+                used += c;
+            }
+            // A block that needs less than half of what it holds gives the rest back.
+            if (buf.size() > 2 * (used + NeighbourLists::kSlack) + 4096) {
+                buf.resize(used + NeighbourLists::kSlack);
+                buf.shrink_to_fit();
+            }
+        }
+    });
+}
+
+/// The lists of the subset, each in its fixed slot of `capacity` entries.
+void build_slab(const UniformGrid& grid, std::span<const Vec3> query_positions, Real r2, bool exclude_self,
+                const QuerySubset& subset, NeighbourLists& lists, bool simd) {
+    const std::size_t n = query_positions.size();
+    if (lists.capacity == 0) {  // first build, or from the compact layout (whose lists are kept)
+        Index longest = 0;
+        for (Index c : lists.count) longest = std::max(longest, c);
+        const Index cap = std::max<Index>(48, (longest + 15) / 16 * 16);
+        if (lists.count.size() == n) {
+            std::vector<Index> slab(n * std::size_t(cap));
+            for (std::size_t i = 0; i < n; ++i) {
+                const auto l = lists.of(Index(i));
+                std::copy(l.begin(), l.end(), slab.data() + i * cap);
+            }
+            lists.indices.swap(slab);
+        }
+        lists.capacity = cap;
+        std::vector<Index>().swap(lists.start);
+        std::vector<std::vector<Index>>().swap(lists.blocks);
+    }
     if (lists.count.size() != n) lists.count.assign(n, 0);
-    if (lists.capacity == 0) lists.capacity = 48;
     const std::size_t m = subset.all ? n : subset.indices.size();
-    constexpr Index kNoSelf = ~Index(0);
     for (;;) {
         if (lists.indices.size() != n * std::size_t(lists.capacity))
             lists.indices.resize(n * std::size_t(lists.capacity));
         std::atomic<Index> overflow{0};
         const Index cap = lists.capacity;
-        const std::span<const Index> sorted_index = grid.sorted_index();
-        const Real* sx = grid.sorted_x();
-        const Real* sy = grid.sorted_y();
-        const Real* sz = grid.sorted_z();
         tbb::enumerable_thread_specific<std::vector<Index>> scratch;
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m, 256), [&](const auto& r) {
             Index local_max = 0;
@@ -101,30 +177,11 @@ void build_neighbour_lists(const UniformGrid& grid, std::span<const Vec3> query_
             for (std::size_t q = r.begin(); q < r.end(); ++q) {
                 const Index i = subset.all ? Index(q) : subset.indices[q];
                 const Vec3 xi = query_positions[i];
-                Index* out = lists.indices.data() + std::size_t(i) * cap;
-                std::size_t candidates = 0;
-                grid.for_each_candidate_range(xi, [&](Index b, Index e) { candidates += e - b; });
-                // One vector of slack for the vectorised filter's whole-vector stores.
-                if (found.size() < candidates + UniformGrid::kPadding) found.resize(2 * candidates + UniformGrid::kPadding);
-                Index* dst = found.data();
-                Index c = 0;
-                if (simd) {
-                    c = filter_candidates_simd(grid, xi, exclude_self ? i : kNoSelf, r2, dst);
-                } else {
-                    // Branch-free scalar filter: every candidate is written and the cursor
-                    // advances only when it is in range, so the loop has no data-dependent
-                    // branch (the in-range test is a coin toss for about half the candidates
-                    // once the start lattice has become disordered).
-                    grid.for_each_candidate_range(xi, [&](Index b, Index e) {
-                        for (Index k = b; k < e; ++k) {
-                            const Index j = sorted_index[k];
-                            const Vec3 d = xi - Vec3(sx[k], sy[k], sz[k]);
-                            dst[c] = j;
-                            c += Index(d.squaredNorm() < r2) & Index(!(exclude_self && j == i));
-                        }
-                    });
-                }
-                std::copy_n(found.data(), std::min(c, cap), out);
+                const CandidateRanges ranges = grid.candidate_ranges(xi);
+                if (found.size() < ranges.total + NeighbourLists::kSlack)
+                    found.resize(2 * ranges.total + NeighbourLists::kSlack);
+                const Index c = filter(grid, ranges, xi, exclude_self ? i : kNoSelf, r2, found.data(), simd);
+                std::copy_n(found.data(), std::min(c, cap), lists.indices.data() + std::size_t(i) * cap);
                 lists.count[i] = c;
                 local_max = std::max(local_max, c);
             }
@@ -139,10 +196,22 @@ void build_neighbour_lists(const UniformGrid& grid, std::span<const Vec3> query_
         lists.indices.clear();
         if (!subset.all) {
             // The other particles' lists must move to the new layout too: rebuild them all.
-            build_neighbour_lists(grid, query_positions, radius, exclude_self, QuerySubset{}, lists, simd);
+            build_slab(grid, query_positions, r2, exclude_self, QuerySubset{}, lists, simd);
             return;
         }
     }
+}
+
+}  // namespace
+
+void build_neighbour_lists(const UniformGrid& grid, std::span<const Vec3> query_positions,
+                           Real radius, bool exclude_self, const QuerySubset& subset,
+                           NeighbourLists& lists, bool simd) {
+    const Real r2 = radius * radius;
+    if (subset.all)
+        build_compact(grid, query_positions, r2, exclude_self, lists, simd);
+    else
+        build_slab(grid, query_positions, r2, exclude_self, subset, lists, simd);
 }
 
 void NeighbourLists::permute(std::span<const Index> perm, bool remap_entries) {
@@ -153,19 +222,74 @@ void NeighbourLists::permute(std::span<const Index> perm, bool remap_entries) {
         inverse.resize(n);
         for (std::size_t i = 0; i < n; ++i) inverse[perm[i]] = Index(i);
     }
-    std::vector<Index> new_count(n), new_indices(indices.size());
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const auto& r) {
-        for (std::size_t i = r.begin(); i < r.end(); ++i) {
-            const Index from = perm[i];
-            const Index c = std::min(count[from], capacity);
-            new_count[i] = count[from];
-            const Index* src = indices.data() + std::size_t(from) * capacity;
-            Index* dst = new_indices.data() + i * capacity;
-            for (Index k = 0; k < c; ++k) dst[k] = remap_entries ? inverse[src[k]] : src[k];
+    auto copy_list = [&](Index from, Index* dst) {
+        const auto src = of(from);
+        for (std::size_t k = 0; k < src.size(); ++k) dst[k] = remap_entries ? inverse[src[k]] : src[k];
+    };
+    std::vector<Index> new_count(n);
+    if (!compact()) {
+        std::vector<Index> new_indices(indices.size());
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const auto& r) {
+            for (std::size_t i = r.begin(); i < r.end(); ++i) {
+                new_count[i] = count[perm[i]];
+                copy_list(perm[i], new_indices.data() + i * capacity);
+            }
+        });
+        count.swap(new_count);
+        indices.swap(new_indices);
+        return;
+    }
+    std::vector<Index> new_start(n);
+    std::vector<std::vector<Index>> new_blocks(blocks.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks.size(), 1), [&](const auto& r) {
+        for (std::size_t b = r.begin(); b < r.end(); ++b) {
+            const std::size_t end = std::min(n, (b + 1) * kBlock);
+            std::size_t used = 0;
+            for (std::size_t i = b * kBlock; i < end; ++i) used += count[perm[i]];
+            new_blocks[b].resize(used + kSlack);
+            used = 0;
+            for (std::size_t i = b * kBlock; i < end; ++i) {
+                new_count[i] = count[perm[i]];
+                new_start[i] = Index(used);
+                copy_list(perm[i], new_blocks[b].data() + used);
+                used += new_count[i];
+            }
         }
     });
     count.swap(new_count);
-    indices.swap(new_indices);
+    start.swap(new_start);
+    blocks.swap(new_blocks);
+}
+
+std::vector<Index> NeighbourLists::concatenated() const {
+    std::vector<Index> out;
+    out.reserve(total());
+    for (std::size_t i = 0; i < count.size(); ++i) {
+        const auto l = of(Index(i));
+        out.insert(out.end(), l.begin(), l.end());
+    }
+    return out;
+}
+
+void NeighbourLists::assign_compact(std::vector<Index> counts, std::span<const Index> entries) {
+    capacity = 0;
+    std::vector<Index>().swap(indices);
+    count = std::move(counts);
+    const std::size_t n = count.size();
+    start.assign(n, 0);
+    blocks.assign((n + kBlock - 1) / kBlock, {});
+    std::size_t from = 0;
+    for (std::size_t b = 0; b < blocks.size(); ++b) {
+        std::size_t used = 0;
+        const std::size_t end = std::min(n, (b + 1) * kBlock);
+        for (std::size_t i = b * kBlock; i < end; ++i) used += count[i];
+        if (from + used > entries.size()) throw std::length_error("neighbour lists: fewer entries than the counts sum to");
+        blocks[b].assign(entries.begin() + std::ptrdiff_t(from), entries.begin() + std::ptrdiff_t(from + used));
+        blocks[b].resize(used + kSlack);
+        used = 0;
+        for (std::size_t i = b * kBlock; i < end; ++i) start[i] = Index(used), used += count[i];
+        from += used;
+    }
 }
 
 namespace {

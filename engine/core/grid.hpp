@@ -3,6 +3,7 @@
 /// @brief Uniform grid with cell size equal to the support radius, built in parallel, and
 /// fixed-capacity neighbour lists that can be rebuilt for any subset of particles.
 #include <algorithm>
+#include <array>
 #include <cstdint>
 #include <span>
 
@@ -13,6 +14,14 @@
 
 namespace sph {
 
+/// @brief The candidates around a point: at most 9 contiguous ranges of sorted slots (one per
+/// x-row of the 27 surrounding cells), empty ranges left out.
+struct CandidateRanges {
+    std::array<Index, 9> begin{}, end{};
+    int count = 0;
+    std::size_t total = 0;  ///< candidates over all ranges
+};
+
 /// @brief Dense uniform grid over a box. Cells are numbered x-fastest, so the three cells of
 /// one x-row are contiguous in the sorted order and a 27-cell query is 9 contiguous ranges.
 class UniformGrid {
@@ -22,9 +31,9 @@ public:
     /// clamped into the border cells (the run stops on such particles anyway).
     UniformGrid(const Aabb& box, Real cell_size);
 
-    /// @brief Sorts particle indices by cell (deterministically: ties by index) and gathers
-    /// their coordinates in that order, one array per axis (what the vectorised filter loads).
-    /// Parallel; O(N log N) with a nearly sorted input.
+    /// @brief Sorts particle indices by cell (a counting sort, so ties keep index order and the
+    /// result is deterministic) and gathers their coordinates in that order, one array per axis
+    /// (what the vectorised filter loads). O(N + cells); the cell keys are parallel.
     void build(std::span<const Vec3> positions);
 
     /// Slots past the last particle that the sorted arrays carry (copies of a far point), so a
@@ -71,6 +80,19 @@ public:
             }
     }
     /// Particle index by sorted slot (particle_count() entries; kPadding readable ones follow).
+    /// @brief The 27 cells around x as contiguous slot ranges (what for_each_candidate_range visits).
+    CandidateRanges candidate_ranges(const Vec3& x) const {
+        CandidateRanges r;
+        for_each_candidate_range(x, [&](Index b, Index e) {
+            if (e > b) {
+                r.begin[r.count] = b;
+                r.end[r.count] = e;
+                ++r.count;
+                r.total += e - b;
+            }
+        });
+        return r;
+    }
     std::span<const Index> sorted_index() const { return {m_sorted_index.data(), m_count}; }
     /// Coordinates by sorted slot, one array per axis; kPadding readable slots follow the last.
     const Real* sorted_x() const { return m_sx.data(); }
@@ -87,32 +109,43 @@ private:
     Vec3 m_origin = Vec3::Zero();
     Real m_cell = 1, m_inv_cell = 1;
     Eigen::Vector3i m_dims{1, 1, 1};
-    std::vector<std::uint64_t> m_keys;    ///< (cell << 32) | index, sorted
     std::vector<Index> m_cell_start;      ///< first sorted slot of each cell; size cells + 1
     std::size_t m_count = 0;
     std::vector<Index> m_sorted_index;    ///< particle_count() + kPadding
     std::vector<Real> m_sx, m_sy, m_sz;   ///< particle_count() + kPadding each
 };
 
-/// @brief Neighbour lists with a fixed capacity per query particle, so the lists of any
-/// subset can be rebuilt in place while the others keep theirs (individual stepping).
-/// Capacity grows (and every list is rebuilt) when a particle has more neighbours.
+/// @brief Neighbour lists of query particles, in one of two layouts:
+/// * slab (capacity > 0): a fixed capacity per query particle, so the lists of any subset can
+///   be rebuilt in place while the others keep theirs (individual stepping). Capacity grows
+///   (and every list is rebuilt) when a particle has more neighbours.
+/// * compact (capacity == 0): every list rebuilt at once (global, constant, PCISPH), stored
+///   back to back in blocks of kBlock query particles, about 2.5x smaller than a slab.
+/// Either way a list may be read a whole vector (kSlack entries) past its end.
 struct NeighbourLists {
-    Index capacity = 0;
+    static constexpr std::size_t kBlock = 256;  ///< query particles per compact block
+    static constexpr std::size_t kSlack = 16;   ///< readable entries after every list
+    Index capacity = 0;          ///< slab: entries per query particle (a multiple of 16); 0: compact
     std::vector<Index> count;    ///< per query particle
-    std::vector<Index> indices;  ///< count.size() * capacity
+    std::vector<Index> indices;  ///< slab: count.size() * capacity
+    std::vector<Index> start;    ///< compact: first entry of each list in its block
+    std::vector<std::vector<Index>> blocks;  ///< compact: the lists of particles [kBlock b, kBlock (b + 1))
 
+    bool compact() const { return capacity == 0; }
     std::span<const Index> of(Index i) const {
-        return {indices.data() + std::size_t(i) * capacity, count[i]};
+        const Index* base = capacity ? indices.data() + std::size_t(i) * capacity : blocks[i / kBlock].data() + start[i];
+        return {base, count[i]};
     }
-    std::size_t bytes() const {
-        return count.capacity() * sizeof(Index) + indices.capacity() * sizeof(Index);
-    }
+    std::size_t bytes() const;
     std::size_t total() const;
     /// @brief Follows a permutation of the query particles (new[i] = old[perm[i]]); when
     /// `remap_entries`, the entries refer to the same particle set and are renumbered too.
     /// Keeps the lists of particles that are not rebuilt this step valid after a sort.
     void permute(std::span<const Index> perm, bool remap_entries);
+    /// @brief Every list, one after another in query order (the checkpoint form).
+    std::vector<Index> concatenated() const;
+    /// @brief The compact layout from counts and concatenated lists (as concatenated() gives).
+    void assign_compact(std::vector<Index> counts, std::span<const Index> entries);
 };
 
 /// @brief Indices i in [0, n) with pred(i), ascending; parallel and deterministic.
@@ -129,7 +162,7 @@ struct QuerySubset {
 /// with |x_i - x_j|^2 < radius^2, in the grid's sorted order, excluding j == i when
 /// `exclude_self` (query and grid are the same set). Equals brute force exactly. `simd` takes
 /// the vectorised filter (neighbour_filter.hpp; float builds), else the scalar one: the same
-/// lists either way.
+/// lists either way. Every list (subset.all) gives the compact layout, a subset the slab one.
 void build_neighbour_lists(const UniformGrid& grid, std::span<const Vec3> query_positions,
                            Real radius, bool exclude_self, const QuerySubset& subset,
                            NeighbourLists& lists, bool simd);

@@ -21,7 +21,8 @@ namespace HWY_NAMESPACE {
 namespace hn = hwy::HWY_NAMESPACE;
 
 #ifndef SPH_DOUBLE
-Index FilterCandidates(const UniformGrid& grid, const Vec3& xi, Index self, float r2, Index* dst) {
+Index FilterCandidates(const UniformGrid& grid, const CandidateRanges& ranges, const Vec3& xi, Index self, float r2,
+                       Index* dst) {
     const hn::ScalableTag<float> d;
     const hn::RebindToUnsigned<decltype(d)> du;
     const std::size_t lanes = hn::Lanes(d);
@@ -33,7 +34,8 @@ Index FilterCandidates(const UniformGrid& grid, const Vec3& xi, Index self, floa
     const auto vr2 = hn::Set(d, r2);
     const auto vself = hn::Set(du, self);
     Index c = 0;
-    grid.for_each_candidate_range(xi, [&](Index b, Index e) {
+    for (int r = 0; r < ranges.count; ++r) {
+        const Index b = ranges.begin[r], e = ranges.end[r];
         for (Index k = b; k < e; k += Index(lanes)) {
             // Slots past e are in range of the arrays (kPadding) and masked off by FirstN.
             const auto dx = hn::Sub(vx, hn::LoadU(d, sx + k));
@@ -48,11 +50,11 @@ Index FilterCandidates(const UniformGrid& grid, const Vec3& xi, Index self, floa
             hn::StoreU(hn::Compress(j, in), du, dst + c);
             c += Index(hn::CountTrue(du, in));
         }
-    });
+    }
     return c;
 }
 #else
-Index FilterCandidates(const UniformGrid&, const Vec3&, Index, Real, Index*) { return 0; }
+Index FilterCandidates(const UniformGrid&, const CandidateRanges&, const Vec3&, Index, Real, Index*) { return 0; }
 #endif
 
 }  // namespace HWY_NAMESPACE
@@ -63,8 +65,9 @@ HWY_AFTER_NAMESPACE();
 namespace sph {
 HWY_EXPORT(FilterCandidates);
 
-Index filter_candidates_simd(const UniformGrid& grid, const Vec3& xi, Index self, Real r2, Index* dst) {
-    return HWY_DYNAMIC_DISPATCH(FilterCandidates)(grid, xi, self, r2, dst);
+Index filter_candidates_simd(const UniformGrid& grid, const CandidateRanges& ranges, const Vec3& xi, Index self, Real r2,
+                             Index* dst) {
+    return HWY_DYNAMIC_DISPATCH(FilterCandidates)(grid, ranges, xi, self, r2, dst);
 }
 
 std::string simd_target() {

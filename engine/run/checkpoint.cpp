@@ -62,13 +62,17 @@ private:
     std::size_t m_pos = 0;
 };
 
+// Slab lists (capacity > 0) are stored as the slab; compact lists (capacity 0) as their
+// entries one after another (NeighbourLists::concatenated).
 std::string lists_section(const NeighbourLists& l) {
     std::string s;
+    const std::vector<Index> compact = l.compact() ? l.concatenated() : std::vector<Index>{};
+    const std::vector<Index>& entries = l.compact() ? compact : l.indices;
     put(s, std::uint64_t(l.capacity));
     put(s, std::uint64_t(l.count.size()));
-    put(s, std::uint64_t(l.indices.size()));
+    put(s, std::uint64_t(entries.size()));
     s += raw_vector(l.count);
-    s += raw_vector(l.indices);
+    s += raw_vector(entries);
     return s;
 }
 
@@ -80,6 +84,15 @@ void restore_lists(NeighbourLists& l, const std::string& data, const std::string
     const auto ni = std::size_t(c.get<std::uint64_t>());
     c.get_vector(l.count, nc);
     c.get_vector(l.indices, ni);
+    if (l.capacity > 0) return;
+    std::uint64_t sum = 0;
+    for (Index k : l.count) sum += k;
+    if (sum != ni)
+        throw CheckpointError(file.string() + ": section '" + what + "' holds " + std::to_string(ni) +
+                              " neighbour entries, but its counts sum to " + std::to_string(sum));
+    std::vector<Index> entries;
+    entries.swap(l.indices);
+    l.assign_compact(std::move(l.count), entries);
 }
 
 std::string column_section(const ComponentStore& store, const std::string& name) {

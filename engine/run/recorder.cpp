@@ -249,6 +249,11 @@ nlohmann::json Recorder::finish(const Simulation& sim, double wall_seconds, int 
     const std::size_t bytes = sim.particle_bytes();
     j["particle_data_bytes"] = bytes;
     j["bytes_per_fluid_particle"] = w.fluid.size() ? double(bytes) / double(w.fluid.size()) : 0.0;
+    // Where those bytes go (boundary parts are shared out over the fluid particles too).
+    nlohmann::json parts = nlohmann::json::object();
+    for (const auto& [name, b] : sim.memory_parts())
+        if (b > 0) parts[name] = w.fluid.size() ? double(b) / double(w.fluid.size()) : 0.0;
+    j["bytes_per_fluid_particle_by_part"] = parts;
     j["peak_memory_per_fluid_particle"] = w.fluid.size() ? double(peak_memory_bytes()) / double(w.fluid.size()) : 0.0;
     j["physics"] = {{"particle_radius", w.physics.particle_radius},
                     {"support_radius", w.physics.h},

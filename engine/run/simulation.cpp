@@ -77,9 +77,21 @@ void Simulation::trace_non_finite(std::size_t system) {
 }
 
 std::size_t Simulation::particle_bytes() const {
+    std::size_t sum = 0;
+    for (const auto& [name, bytes] : memory_parts()) sum += bytes;
+    return sum;
+}
+
+std::vector<std::pair<std::string, std::size_t>> Simulation::memory_parts() const {
     const World& w = m_world;
-    return w.fluid.store.bytes() + w.boundary.store.bytes() + w.fluid_grid.bytes() + w.boundary_grid.bytes() +
-           w.fluid_neighbours.bytes() + w.boundary_neighbours.bytes();
+    std::vector<std::pair<std::string, std::size_t>> parts;
+    for (const auto& name : w.fluid.store.names()) parts.emplace_back("fluid." + name, w.fluid.store.bytes(name));
+    for (const auto& name : w.boundary.store.names()) parts.emplace_back("boundary." + name, w.boundary.store.bytes(name));
+    parts.emplace_back("fluid.grid", w.fluid_grid.bytes());
+    parts.emplace_back("boundary.grid", w.boundary_grid.bytes());
+    parts.emplace_back("fluid.neighbours", w.fluid_neighbours.bytes());
+    parts.emplace_back("fluid.boundary_neighbours", w.boundary_neighbours.bytes());
+    return parts;
 }
 
 void Simulation::spatial_sort() {

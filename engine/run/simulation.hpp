@@ -54,6 +54,9 @@ public:
     const SystemGraph& graph() const { return *m_graph; }
     /// @brief Bytes held by particle columns, grids and neighbour lists.
     std::size_t particle_bytes() const;
+    /// @brief particle_bytes() by part: "fluid.<column>", "boundary.<column>", the two grids
+    /// and the two neighbour lists, in that order.
+    std::vector<std::pair<std::string, std::size_t>> memory_parts() const;
 
 private:
     void check_step();

@@ -1,7 +1,7 @@
-// He et al. eq. 1 (rho_i = sum_j m_j W_ij, self included) + Akinci et al. 2012 eq. 6
-// (+ rho0 sum_b V_b W_ib) and the Tait pressure of He eq. 2, vectorised across each
-// particle's neighbour list: 16 (AVX-512) or 8 (AVX2) neighbours per iteration, positions
-// gathered from the xyz rows. Compiled per target, chosen at run time (simd.hpp).
+// The kernel sums of He et al. eq. 1 + Akinci et al. 2012 eq. 6 (WCSPH summation density) and
+// Ihmsen et al. 2010 eq. 13 (PCISPH predicted density), vectorised across each particle's
+// neighbour list: 16 (AVX-512) or 8 (AVX2) neighbours per iteration, positions gathered from
+// the xyz rows. Compiled per target, chosen at run time (engine/core/simd.hpp).
 #include "engine/core/simd_targets.hpp"
 
 #undef HWY_TARGET_INCLUDE
@@ -10,7 +10,6 @@
 #include <hwy/highway.h>
 
 #include "engine/core/kernel_simd-inl.hpp"
-#include "systems/density/density_kernels.hpp"
 #include "systems/density/density_simd.hpp"
 
 HWY_BEFORE_NAMESPACE();
@@ -19,7 +18,8 @@ namespace HWY_NAMESPACE {
 namespace hn = hwy::HWY_NAMESPACE;
 
 #ifndef SPH_DOUBLE
-/// sum_j W(|x_i - x_j|) over one list, positions gathered from the xyz rows at `x`.
+/// sum_j w_j W(|x_i - x_j|) over one list (w_j = 1 without weights), positions gathered from
+/// the xyz rows at `x`.
 template <class D>
 HWY_INLINE Real kernel_sum(D d, const KernelV<D>& k, const Real* x, const Real* xi, const Index* list,
                            std::size_t count, const Real* weight) {
@@ -40,23 +40,21 @@ HWY_INLINE Real kernel_sum(D d, const KernelV<D>& k, const Real* x, const Real* 
     return hn::GetLane(hn::SumOfLanes(d, sum));
 }
 
-void DensityRows(const DensityPairArgs& a, const Index* rows, std::size_t begin, std::size_t end) {
+void KernelSums(const KernelSumArgs& a, const Index* rows, std::size_t begin, std::size_t end, Real* fluid_sum,
+                Real* boundary_sum) {
     hn::ScalableTag<Real> d;
     const KernelV<decltype(d)> k(d, *a.kernel);
     for (std::size_t q = begin; q < end; ++q) {
         const Index i = rows ? rows[q] : Index(q);
         const Real* xi = a.x + 3 * std::size_t(i);
-        const Real sum = kernel_sum(d, k, a.x, xi, a.fluid->of(i).data(), a.fluid->count[i], nullptr);
-        Real bsum = 0;
-        if (a.xb) bsum = kernel_sum(d, k, a.xb, xi, a.boundary->of(i).data(), a.boundary->count[i], a.volume_b);
-        const Real rho = a.self + a.mass * sum + a.rest_density * bsum;
-        a.rho[i] = rho;
-        a.pressure[i] = tait_pressure(rho, a.rest_density, a.tait_b);
-        if (a.rho_last) a.rho_last[i] = rho;
+        fluid_sum[q - begin] = kernel_sum(d, k, a.x, xi, a.fluid->of(i).data(), a.fluid->count[i], nullptr);
+        if (a.xb)
+            boundary_sum[q - begin] =
+                kernel_sum(d, k, a.xb, xi, a.boundary->of(i).data(), a.boundary->count[i], a.weight_b);
     }
 }
 #else
-void DensityRows(const DensityPairArgs&, const Index*, std::size_t, std::size_t) {}
+void KernelSums(const KernelSumArgs&, const Index*, std::size_t, std::size_t, Real*, Real*) {}
 #endif
 
 }  // namespace HWY_NAMESPACE
@@ -65,9 +63,10 @@ HWY_AFTER_NAMESPACE();
 
 #if HWY_ONCE
 namespace sph {
-HWY_EXPORT(DensityRows);
-void density_rows_simd(const DensityPairArgs& a, const Index* rows, std::size_t begin, std::size_t end) {
-    HWY_DYNAMIC_DISPATCH(DensityRows)(a, rows, begin, end);
+HWY_EXPORT(KernelSums);
+void kernel_sums_simd(const KernelSumArgs& a, const Index* rows, std::size_t begin, std::size_t end, Real* fluid_sum,
+                      Real* boundary_sum) {
+    HWY_DYNAMIC_DISPATCH(KernelSums)(a, rows, begin, end, fluid_sum, boundary_sum);
 }
 }  // namespace sph
 #endif

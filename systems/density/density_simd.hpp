@@ -1,8 +1,10 @@
 #pragma once
 /// @file density_simd.hpp
-/// @brief The vectorised density loop (density_simd.cpp): He et al. eq. 1 plus Akinci et al.
-/// 2012 eq. 6 and the Tait pressure of eq. 2, for a range of rows, with the same formulas
-/// as DensitySystem's scalar loop (the sums reassociated across vector lanes).
+/// @brief The vectorised kernel sums of the density phases (density_simd.cpp): for each row i,
+/// sum_j W(|x_i - x_j|) over its fluid list and sum_b w_b W(|x_i - x_b|) over its boundary
+/// list, the same terms as the scalar loops (reassociated across vector lanes). WCSPH's
+/// summation density (He eq. 1, Akinci eq. 6) and PCISPH's predicted density (Ihmsen eq. 13)
+/// are these two sums.
 #include <cstddef>
 
 #include "engine/core/grid.hpp"
@@ -11,20 +13,18 @@
 
 namespace sph {
 
-struct DensityPairArgs {
+struct KernelSumArgs {
     const Real* x = nullptr;               ///< fluid positions, xyz per particle
     const NeighbourLists* fluid = nullptr;
-    const Real* xb = nullptr;              ///< boundary positions (nullptr: no boundary term)
-    const Real* volume_b = nullptr;
+    const Real* xb = nullptr;              ///< boundary positions, xyz (nullptr: no boundary sum)
+    const Real* weight_b = nullptr;        ///< w_b per boundary particle
     const NeighbourLists* boundary = nullptr;
     const CubicSpline* kernel = nullptr;
-    Real self = 0, mass = 0, rest_density = 0, tait_b = 0;
-    Real* rho = nullptr;
-    Real* pressure = nullptr;
-    Real* rho_last = nullptr;              ///< also written when not null (individual stepping)
 };
 
-/// @brief Density and pressure of rows[k] (or of row k when rows is null), k in [begin, end).
-void density_rows_simd(const DensityPairArgs& a, const Index* rows, std::size_t begin, std::size_t end);
+/// @brief For k in [begin, end) and i = rows ? rows[k] : k: fluid_sum[k - begin] =
+/// sum_j W(|x_i - x_j|) and, with a boundary, boundary_sum[k - begin] = sum_b w_b W(|x_i - x_b|).
+void kernel_sums_simd(const KernelSumArgs& a, const Index* rows, std::size_t begin, std::size_t end, Real* fluid_sum,
+                      Real* boundary_sum);
 
 }  // namespace sph

@@ -6,6 +6,8 @@
 
 #include <tbb/parallel_for.h>
 
+#include <array>
+
 #include "engine/data/components.hpp"
 #include "engine/data/world.hpp"
 #include "engine/graph/context.hpp"
@@ -51,28 +53,34 @@ void DensitySystem::run(Context& ctx) {
         rho[i] = self + ph.mass * sum + ph.rest_density * bsum;
         p[i] = tait_pressure(rho[i], ph.rest_density, ph.tait_b);
     };
-    // The vectorised loop (simulation.simd) computes the same sums; the scalar lambda above
-    // is the reference it is tested against.
-    DensityPairArgs simd;
-    if (ph.simd) {
-        simd.x = x.empty() ? nullptr : x.data()->data();
-        simd.fluid = &fluid_nb;
-        if (has_boundary) {
-            simd.xb = xb.data()->data();
-            simd.volume_b = vb.data();
-            simd.boundary = boundary_nb;
-        }
-        simd.kernel = &kernel;
-        simd.self = self;
-        simd.mass = ph.mass;
-        simd.rest_density = ph.rest_density;
-        simd.tait_b = ph.tait_b;
-        simd.rho = rho.data();
-        simd.pressure = p.data();
+    // The vectorised loop (simulation.simd) takes the same two sums over the same lists; the
+    // scalar lambda above is the reference it is tested against.
+    KernelSumArgs sums;
+    sums.x = x.empty() ? nullptr : x.data()->data();
+    sums.fluid = &fluid_nb;
+    if (has_boundary) {
+        sums.xb = xb.data()->data();
+        sums.weight_b = vb.data();
+        sums.boundary = boundary_nb;
     }
+    sums.kernel = &kernel;
+    auto vectorised = [&](const Index* rows, std::size_t begin, std::size_t end, std::span<Real> rho_last) {
+        constexpr std::size_t kChunk = 256;
+        std::array<Real, kChunk> sum{}, bsum{};
+        for (std::size_t b = begin; b < end; b += kChunk) {
+            const std::size_t e = std::min(end, b + kChunk);
+            kernel_sums_simd(sums, rows, b, e, sum.data(), bsum.data());
+            for (std::size_t k = b; k < e; ++k) {
+                const Index i = rows ? rows[k] : Index(k);
+                rho[i] = self + ph.mass * sum[k - b] + ph.rest_density * (has_boundary ? bsum[k - b] : Real(0));
+                p[i] = tait_pressure(rho[i], ph.rest_density, ph.tait_b);
+                if (!rho_last.empty()) rho_last[i] = rho[i];
+            }
+        }
+    };
     if (!m_individual) {
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 512), [&](const auto& r) {
-            if (ph.simd) return density_rows_simd(simd, nullptr, r.begin(), r.end());
+            if (ph.simd) return vectorised(nullptr, r.begin(), r.end(), {});
             for (std::size_t i = r.begin(); i < r.end(); ++i) summation(Index(i));
         });
         return;
@@ -82,9 +90,8 @@ void DensitySystem::run(Context& ctx) {
     // asynchronous integration applies to every particle at the end of each step.
     const auto& active = ctx.read(res::active_set);
     auto rho_last = ctx.write(fluid(comp::density_last));
-    simd.rho_last = rho_last.data();
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, active.size(), 256), [&](const auto& r) {
-        if (ph.simd) return density_rows_simd(simd, active.data(), r.begin(), r.end());
+        if (ph.simd) return vectorised(active.data(), r.begin(), r.end(), rho_last);
         for (std::size_t k = r.begin(); k < r.end(); ++k) {
             summation(active[k]);
             rho_last[active[k]] = rho[active[k]];

@@ -80,11 +80,13 @@ void ForceRows(const ForcePairArgs& a, const Index* rows, std::size_t begin, std
             auto coef = hn::Add(pi, hn::Div(pj, hn::Mul(rhoj, rhoj)));
             if (viscous)
                 coef = hn::Add(coef, monaghan(dot3(vx, vy, vz, dx, dy, dz), r2, alpha_2hc, hn::Add(vrhoi, rhoj), eps_h2));
-            coef = hn::Mul(m, coef);
+            // Masked lanes read row 0, whose values may be anything: their coefficient is zeroed
+            // (a zero gradient alone would give 0 * inf = NaN).
+            coef = hn::IfThenElseZero(in, hn::Mul(m, coef));
             ax = hn::NegMulAdd(coef, gx, ax);
             ay = hn::NegMulAdd(coef, gy, ay);
             az = hn::NegMulAdd(coef, gz, az);
-            if (a.drho) div = hn::MulAdd(m, dot3(vx, vy, vz, gx, gy, gz), div);
+            if (a.drho) div = hn::MulAdd(m, dot3(vx, vy, vz, gx, gy, gz), div);  // gx.. are 0 in masked lanes
         }
         if (a.xb) {
             const Index* blist = a.boundary->of(i).data();
@@ -111,7 +113,7 @@ void ForceRows(const ForcePairArgs& a, const Index* rows, std::size_t begin, std
                 if (viscous_b)
                     coef = hn::Add(coef, monaghan(dot3(vx, vy, vz, dx, dy, dz), r2, alpha_b_2hc, hn::Add(vrhoi, rho0), eps_h2));
                 const auto psi = hn::Mul(rho0, hn::GatherIndex(d, a.volume_b, b));
-                coef = hn::Mul(psi, coef);
+                coef = hn::IfThenElseZero(in, hn::Mul(psi, coef));
                 ax = hn::NegMulAdd(coef, gx, ax);
                 ay = hn::NegMulAdd(coef, gy, ay);
                 az = hn::NegMulAdd(coef, gz, az);
@@ -125,8 +127,53 @@ void ForceRows(const ForcePairArgs& a, const Index* rows, std::size_t begin, std
         if (a.drho) a.drho[i] = hn::GetLane(hn::SumOfLanes(d, div));
     }
 }
+
+// Ihmsen et al. 2010 eq. 6: a_i = -sum_j m (p_i/rho_i^2 + p_j/rho_j^2) grad W_ij
+//                                 -sum_b m_b (p_i/rho_i^2 + p_b/rho_b^2) grad W_ib.
+void PressureForceRows(const PressurePairArgs& a, std::size_t begin, std::size_t end) {
+    hn::ScalableTag<Real> d;
+    hn::RebindToSigned<decltype(d)> di;
+    const KernelV<decltype(d)> k(d, *a.kernel);
+    const auto m = hn::Set(d, a.mass);
+    for (std::size_t i = begin; i < end; ++i) {
+        const Real* xi = a.x + 3 * i;
+        const auto pi = hn::Set(d, a.p[i] / (a.rho[i] * a.rho[i]));
+        const auto xix = hn::Set(d, xi[0]), xiy = hn::Set(d, xi[1]), xiz = hn::Set(d, xi[2]);
+        auto ax = hn::Zero(d), ay = hn::Zero(d), az = hn::Zero(d);
+        auto pairs = [&](const Real* xs, const NeighbourLists& lists, const Real* weight, const Real* rho,
+                         const Real* p) {
+            const Index* list = lists.of(Index(i)).data();
+            const std::size_t count = lists.count[i];
+            for (std::size_t k0 = 0; k0 < count; k0 += hn::Lanes(d)) {
+                hn::Mask<decltype(di)> in_i;
+                const auto j = load_neighbours(di, list, k0, count, in_i);
+                const auto j3 = hn::Add(hn::ShiftLeft<1>(j), j);
+                const auto xj = gather3(d, xs, j3);
+                const auto dx = hn::Sub(xix, xj.x), dy = hn::Sub(xiy, xj.y), dz = hn::Sub(xiz, xj.z);
+                const auto in = hn::RebindMask(d, in_i);
+                const auto s = hn::IfThenElseZero(in, k.grad_factor(d, hn::Sqrt(norm2(dx, dy, dz))));
+                const auto rhoj = hn::GatherIndex(d, rho, j);
+                const auto w = weight ? hn::GatherIndex(d, weight, j) : m;
+                // Masked lanes read row 0 (a boundary particle out of the active set has rho = 0,
+                // so p/rho^2 is NaN there): their coefficient is zeroed, not only their gradient.
+                const auto coef = hn::IfThenElseZero(
+                    in, hn::Mul(w, hn::Add(pi, hn::Div(hn::GatherIndex(d, p, j), hn::Mul(rhoj, rhoj)))));
+                ax = hn::NegMulAdd(coef, hn::Mul(dx, s), ax);
+                ay = hn::NegMulAdd(coef, hn::Mul(dy, s), ay);
+                az = hn::NegMulAdd(coef, hn::Mul(dz, s), az);
+            }
+        };
+        pairs(a.x, *a.fluid, nullptr, a.rho, a.p);
+        if (a.xb) pairs(a.xb, *a.boundary, a.mass_b, a.rho_b, a.p_b);
+        Real* acc = a.acc + 3 * i;
+        acc[0] = hn::GetLane(hn::SumOfLanes(d, ax));
+        acc[1] = hn::GetLane(hn::SumOfLanes(d, ay));
+        acc[2] = hn::GetLane(hn::SumOfLanes(d, az));
+    }
+}
 #else
 void ForceRows(const ForcePairArgs&, const Index*, std::size_t, std::size_t) {}
+void PressureForceRows(const PressurePairArgs&, std::size_t, std::size_t) {}
 #endif
 
 }  // namespace HWY_NAMESPACE
@@ -136,8 +183,12 @@ HWY_AFTER_NAMESPACE();
 #if HWY_ONCE
 namespace sph {
 HWY_EXPORT(ForceRows);
+HWY_EXPORT(PressureForceRows);
 void force_rows_simd(const ForcePairArgs& a, const Index* rows, std::size_t begin, std::size_t end) {
     HWY_DYNAMIC_DISPATCH(ForceRows)(a, rows, begin, end);
+}
+void pressure_force_rows_simd(const PressurePairArgs& a, std::size_t begin, std::size_t end) {
+    HWY_DYNAMIC_DISPATCH(PressureForceRows)(a, begin, end);
 }
 }  // namespace sph
 #endif

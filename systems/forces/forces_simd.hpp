@@ -32,4 +32,24 @@ struct ForcePairArgs {
 /// @brief a_i (and drho_i/dt) of rows[k] (or of row k when rows is null), k in [begin, end).
 void force_rows_simd(const ForcePairArgs& a, const Index* rows, std::size_t begin, std::size_t end);
 
+/// @brief PCISPH's pressure acceleration (Ihmsen et al. 2010 eq. 6 with the boundary's
+/// density and pressure, eq. 9-13), the formulas of PcisphPressureForceSystem's scalar loop.
+struct PressurePairArgs {
+    const Real* x = nullptr;  ///< fluid positions, xyz per particle
+    const Real* rho = nullptr;
+    const Real* p = nullptr;
+    const NeighbourLists* fluid = nullptr;
+    const Real* xb = nullptr;  ///< boundary positions (nullptr: no boundary term)
+    const Real* mass_b = nullptr;
+    const Real* rho_b = nullptr;
+    const Real* p_b = nullptr;
+    const NeighbourLists* boundary = nullptr;
+    const CubicSpline* kernel = nullptr;
+    Real mass = 0;
+    Real* acc = nullptr;  ///< written: the pressure acceleration, xyz per particle
+};
+
+/// @brief The pressure acceleration of rows [begin, end).
+void pressure_force_rows_simd(const PressurePairArgs& a, std::size_t begin, std::size_t end);
+
 }  // namespace sph

@@ -6,9 +6,12 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
+#include <array>
+
 #include "engine/data/components.hpp"
 #include "engine/data/world.hpp"
 #include "engine/graph/context.hpp"
+#include "systems/density/density_simd.hpp"
 #include "systems/pcisph/pcisph_components.hpp"
 #include "systems/pcisph/pcisph_kernels.hpp"
 #include "systems/pcisph/pcisph_state.hpp"
@@ -51,16 +54,35 @@ void PcisphDensitySystem::run(Context& ctx) {
     const Real m = ctx.physics().mass, rho0 = ctx.physics().rest_density, self = m * kernel.w(0);
     const Real delta = Real(ctx.read(res::pcisph_delta).delta);
     const std::size_t n = xs.size();
+    // The vectorised sums (simulation.simd) take the same terms as the scalar loop below.
+    const bool simd = ctx.physics().simd;
+    KernelSumArgs sums;
+    sums.x = xs.empty() ? nullptr : xs.data()->data();
+    sums.fluid = &fluid_nb;
+    if (with_boundary) {
+        sums.xb = xb.data()->data();
+        sums.weight_b = mb.data();
+        sums.boundary = boundary_nb;
+    }
+    sums.kernel = &kernel;
+    constexpr std::size_t kChunk = 256;
     const ErrAcc acc = tbb::parallel_deterministic_reduce(
         tbb::blocked_range<std::size_t>(0, n, 1024), ErrAcc{},
         [&](const auto& r, ErrAcc e) {
+            std::array<Real, kChunk> fsum{}, bsums{};
             for (std::size_t i = r.begin(); i < r.end(); ++i) {
-                const Vec3 xi = xs[i];
-                Real sum = 0;
-                for (Index j : fluid_nb.of(Index(i))) sum += kernel.w((xi - xs[j]).norm());
-                Real bsum = 0;
-                if (with_boundary)
-                    for (Index b : boundary_nb->of(Index(i))) bsum += mb[b] * kernel.w((xi - xb[b]).norm());
+                const std::size_t c = (i - r.begin()) % kChunk;
+                if (simd && c == 0) kernel_sums_simd(sums, nullptr, i, std::min(r.end(), i + kChunk), fsum.data(), bsums.data());
+                Real sum = 0, bsum = 0;
+                if (simd) {
+                    sum = fsum[c];
+                    bsum = with_boundary ? bsums[c] : Real(0);
+                } else {
+                    const Vec3 xi = xs[i];
+                    for (Index j : fluid_nb.of(Index(i))) sum += kernel.w((xi - xs[j]).norm());
+                    if (with_boundary)
+                        for (Index b : boundary_nb->of(Index(i))) bsum += mb[b] * kernel.w((xi - xb[b]).norm());
+                }
                 const Real r_i = self + m * sum + bsum;  // eq. 13 (eq. 2 without the boundary)
                 rho[i] = r_i;
                 p[i] = pcisph_pressure_update(p[i], delta, r_i, rho0);  // eq. 3

@@ -9,6 +9,7 @@
 #include "engine/data/components.hpp"
 #include "engine/data/world.hpp"
 #include "engine/graph/context.hpp"
+#include "systems/forces/forces_simd.hpp"
 #include "systems/pcisph/pcisph_components.hpp"
 #include "systems/pcisph/pcisph_kernels.hpp"
 #include "systems/pcisph/pcisph_state.hpp"
@@ -42,7 +43,25 @@ void PcisphPressureForceSystem::run(Context& ctx) {
     }
     const CubicSpline& kernel = ctx.kernel();
     const Real m = ctx.physics().mass;
+    // The vectorised loop (simulation.simd) sums the same terms as the scalar loop below.
+    PressurePairArgs vec;
+    vec.x = x.empty() ? nullptr : x.data()->data();
+    vec.rho = rho.data();
+    vec.p = p.data();
+    vec.fluid = &fluid_nb;
+    if (with_boundary) {
+        vec.xb = xb.data()->data();
+        vec.mass_b = mb.data();
+        vec.rho_b = rhob.data();
+        vec.p_b = pb.data();
+        vec.boundary = boundary_nb;
+    }
+    vec.kernel = &kernel;
+    vec.mass = m;
+    vec.acc = ap.empty() ? nullptr : ap.data()->data();
+    const bool simd = ctx.physics().simd;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 512), [&](const auto& r) {
+        if (simd) return pressure_force_rows_simd(vec, r.begin(), r.end());
         for (std::size_t i = r.begin(); i < r.end(); ++i) {
             const Vec3 xi = x[i];
             const Real pi = p[i] / (rho[i] * rho[i]);

@@ -124,18 +124,63 @@ TEST(NeighbourSearch, VectorisedFilterEqualsScalarInOrder) {
     for (Index i = 0; i < 200; ++i) pts[i * 7] = Vec3(0.1f + 0.00005f * i, 0.1f, 0.1f);  // a clump: growth
     UniformGrid grid(Aabb{Vec3d(-1, -1, -1), Vec3d(0.5, 0.5, 0.5)}, h);
     grid.build(pts);
-    for (const bool self : {true, false}) {
+    std::vector<Index> all(pts.size());
+    for (Index i = 0; i < all.size(); ++i) all[i] = i;
+    // Both layouts: every list at once (compact) and an explicit subset (slab).
+    for (const auto& [self, subset] : {std::pair{true, QuerySubset{}}, std::pair{false, QuerySubset{}},
+                                       std::pair{true, QuerySubset{all, false}}}) {
         NeighbourLists scalar, vectorised;
-        build_neighbour_lists(grid, pts, h, self, QuerySubset{}, scalar, false);
-        build_neighbour_lists(grid, pts, h, self, QuerySubset{}, vectorised, true);
+        build_neighbour_lists(grid, pts, h, self, subset, scalar, false);
+        build_neighbour_lists(grid, pts, h, self, subset, vectorised, true);
         ASSERT_EQ(scalar.capacity, vectorised.capacity);
-        EXPECT_GT(scalar.capacity, 48u);  // the clump grew the lists
+        if (subset.all)
+            EXPECT_TRUE(scalar.compact());
+        else
+            EXPECT_GT(scalar.capacity, 48u);  // the clump grew the slab
         for (Index i = 0; i < pts.size(); ++i) {
             const auto a = scalar.of(i), b = vectorised.of(i);
             ASSERT_EQ(std::vector<Index>(a.begin(), a.end()), std::vector<Index>(b.begin(), b.end()))
                 << "particle " << i << (self ? " (self excluded)" : "");
         }
     }
+}
+
+// The compact layout (every list at once) follows a permutation of the particles like the slab
+// does, survives the checkpoint form (concatenated / assign_compact) entry for entry, and a
+// subset rebuild after it keeps the other particles' lists (the slab takes them over).
+TEST(NeighbourSearch, CompactListsPermuteRoundTripAndBecomeASlab) {
+    const Real h = 0.08f;
+    auto pts = cloud(2500, h, 8);
+    UniformGrid grid(Aabb{Vec3d(-1, -1, -1), Vec3d(0.5, 0.5, 0.5)}, h);
+    grid.build(pts);
+    NeighbourLists lists;
+    build_neighbour_lists(grid, pts, h, true, QuerySubset{}, lists, true);
+    ASSERT_TRUE(lists.compact());
+    ASSERT_EQ(lists.blocks.size(), (pts.size() + NeighbourLists::kBlock - 1) / NeighbourLists::kBlock);
+
+    NeighbourLists copy;
+    copy.assign_compact(lists.count, lists.concatenated());
+    for (Index i = 0; i < pts.size(); ++i) {
+        const auto a = lists.of(i), b = copy.of(i);
+        ASSERT_EQ(std::vector<Index>(a.begin(), a.end()), std::vector<Index>(b.begin(), b.end())) << "particle " << i;
+    }
+
+    std::vector<Index> perm(pts.size());
+    for (Index i = 0; i < perm.size(); ++i) perm[i] = i;
+    std::shuffle(perm.begin(), perm.end(), std::mt19937(4));
+    std::vector<Vec3> moved(pts.size());
+    for (Index i = 0; i < perm.size(); ++i) moved[i] = pts[perm[i]];
+    lists.permute(perm, true);
+    std::vector<Index> all(pts.size());
+    for (Index i = 0; i < all.size(); ++i) all[i] = i;
+    expect_equal_to_brute(grid, moved, moved, h, true, lists, all);
+
+    // A subset rebuild turns the layout into a slab and keeps everybody else's list.
+    grid.build(moved);
+    const std::vector<Index> few{3, 500, 1700};
+    build_neighbour_lists(grid, moved, h, true, QuerySubset{few, false}, lists, true);
+    EXPECT_FALSE(lists.compact());
+    expect_equal_to_brute(grid, moved, moved, h, true, lists, all);
 }
 
 TEST(NeighbourSearch, ZOrderPermutationIsAPermutation) {

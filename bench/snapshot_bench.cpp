@@ -1,0 +1,125 @@
+// Benchmarks on a disordered snapshot: the scene after 0.5 s of flow (a dam break has hit the
+// far wall and splashed, so particles are no longer on the start lattice, which understates the
+// neighbour search 2-2.5x). The snapshot is computed once per scene and stepping mode and saved
+// as a checkpoint fixture in the build tree (bench/fixtures/<scene>_<mode>.ckpt); later runs
+// load it. Every benchmark takes `simd` (1: the vectorised pair loops, 0: the scalar reference
+// loops) and `threads`, so one run gives the vectorised/scalar and 2/1-thread ratios side by side.
+//
+// BM_Snapshot_Step/<scene>/<mode>: one whole step of the flow graph from the snapshot (each
+//   iteration restores the snapshot first, outside the timing, so every iteration times the same
+//   step). items/s = fluid-particle-steps per second.
+// BM_Snapshot_<system>/<scene>: one system of the `global` recipe on the snapshot (fluid_grid,
+//   fluid_neighbours, boundary_neighbours, density, forces), the systems before it run once.
+#include <benchmark/benchmark.h>
+#include <tbb/global_control.h>
+
+#include <filesystem>
+#include <map>
+#include <memory>
+
+#include "engine/data/components.hpp"
+#include "engine/graph/system.hpp"
+#include "engine/run/checkpoint.hpp"
+#include "systems/methods/recipes.hpp"
+
+using namespace sph;
+
+namespace {
+
+constexpr double kSnapshotTime = 0.5;
+
+Scene scene_for(const std::string& scene, const std::string& mode) {
+    std::vector<std::pair<std::string, nlohmann::json>> o{{"/simulation/frame_rate", 0}};
+    if (mode == "adaptive") o.push_back({"/simulation/method", "pcisph"});
+    o.push_back({"/simulation/stepping/mode", mode});
+    return load_scene(SPH_SOURCE_DIR "/scenes/" + scene + ".json", o);
+}
+
+/// A simulation of `scene` in `mode` at t = 0.5 s: from the fixture file if it exists, else
+/// run there (at the machine's thread count) and saved.
+std::unique_ptr<Simulation> snapshot(const std::string& scene, const std::string& mode, bool simd) {
+    Scene s = scene_for(scene, mode);
+    s.simulation.simd = simd;
+    auto sim = make_simulation(s);
+    const std::filesystem::path dir = SPH_BENCH_FIXTURE_DIR;
+    const std::filesystem::path file = dir / (scene + "_" + mode + ".ckpt");
+    if (std::filesystem::exists(file)) {
+        restore_checkpoint(*sim, read_checkpoint(file));
+        return sim;
+    }
+    std::filesystem::create_directories(dir);
+    sim->run_until(kSnapshotTime);
+    write_checkpoint(file, *sim, nlohmann::json{{"fixture", "bench/snapshot_bench.cpp"}});
+    return sim;
+}
+
+void set_counters(benchmark::State& state, const Simulation& sim, double items_per_iteration) {
+    const double n = double(sim.world().fluid.size());
+    state.SetItemsProcessed(std::int64_t(double(state.iterations()) * items_per_iteration));
+    state.counters["fluid_particles"] = n;
+    state.counters["neighbours_per_particle"] = double(sim.world().fluid_neighbours.total()) / n;
+    state.counters["bytes_per_particle"] = double(sim.particle_bytes()) / n;
+}
+
+void snapshot_step(benchmark::State& state, const std::string& scene, const std::string& mode) {
+    const bool simd = state.range(0) != 0;
+    tbb::global_control threads(tbb::global_control::max_allowed_parallelism, std::size_t(state.range(1)));
+    auto sim = snapshot(scene, mode, simd);
+    const Checkpoint ck = read_checkpoint(std::filesystem::path(SPH_BENCH_FIXTURE_DIR) / (scene + "_" + mode + ".ckpt"));
+    double updated = 0;
+    for (auto _ : state) {
+        state.PauseTiming();
+        restore_checkpoint(*sim, ck);
+        state.ResumeTiming();
+        sim->step();
+        updated += double(sim->world().counter_value("force_evaluations"));
+    }
+    set_counters(state, *sim, double(sim->world().fluid.size()));
+    state.counters["evaluated_fraction"] =
+        state.iterations() ? updated / (double(sim->world().fluid.size()) * double(state.iterations())) : 0.0;
+}
+
+/// One system of the `global` recipe, by name, on the snapshot.
+void snapshot_system(benchmark::State& state, const std::string& scene, const std::string& system) {
+    const bool simd = state.range(0) != 0;
+    tbb::global_control threads(tbb::global_control::max_allowed_parallelism, std::size_t(state.range(1)));
+    auto sim = snapshot(scene, "global", simd);
+    World& w = sim->world();
+    Recipe recipe = make_recipe(scene_for(scene, "global"));
+    System* target = nullptr;
+    for (auto& s : recipe.step) s->register_components(w);
+    for (auto& s : recipe.step) {
+        if (s->name() == system) {
+            target = s.get();
+            break;
+        }
+        run_system(*s, w);  // what the system reads: grid, lists, density as this step has them
+    }
+    if (!target) {
+        state.SkipWithError(("no system " + system + " in the global recipe").c_str());
+        return;
+    }
+    for (auto _ : state) run_system(*target, w);
+    set_counters(state, *sim, double(w.fluid.size()));
+}
+
+const bool registered = [] {
+    auto args = [](benchmark::internal::Benchmark* b) {
+        b->ArgNames({"simd", "threads"})
+            ->ArgsProduct({{1, 0}, {1, 2}})
+            ->Unit(benchmark::kMillisecond)
+            ->UseRealTime()
+            ->MinTime(1.0);
+    };
+    for (const std::string scene : {"peer_dam_break", "dam_break_obstacles"}) {
+        for (const std::string mode : {"global", "individual", "adaptive"})
+            args(benchmark::RegisterBenchmark(("BM_Snapshot_Step/" + scene + "/" + mode).c_str(),
+                                              [scene, mode](benchmark::State& s) { snapshot_step(s, scene, mode); }));
+        for (const std::string system : {"fluid_grid", "fluid_neighbours", "boundary_neighbours", "density", "forces"})
+            args(benchmark::RegisterBenchmark(("BM_Snapshot_" + system + "/" + scene).c_str(),
+                                              [scene, system](benchmark::State& s) { snapshot_system(s, scene, system); }));
+    }
+    return true;
+}();
+
+}  // namespace
