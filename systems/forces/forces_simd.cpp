@@ -137,34 +137,118 @@ void PressureForceRows(const PressurePairArgs& a, std::size_t begin, std::size_t
     const auto m = hn::Set(d, a.mass);
     for (std::size_t i = begin; i < end; ++i) {
         const Real* xi = a.x + 3 * i;
-        const auto pi = hn::Set(d, a.p[i] / (a.rho[i] * a.rho[i]));
+        const auto pi = hn::Set(d, a.p_term[i]);
         const auto xix = hn::Set(d, xi[0]), xiy = hn::Set(d, xi[1]), xiz = hn::Set(d, xi[2]);
         auto ax = hn::Zero(d), ay = hn::Zero(d), az = hn::Zero(d);
-        auto pairs = [&](const Real* xs, const NeighbourLists& lists, const Real* weight, const Real* rho,
-                         const Real* p) {
+        // term(j): p_j / rho_j^2 of neighbour lanes j; weight(j): m_j.
+        auto pairs = [&](const Real* xs, const NeighbourLists& lists, auto&& term, auto&& weight) {
             const Index* list = lists.of(Index(i)).data();
             const std::size_t count = lists.count[i];
             for (std::size_t k0 = 0; k0 < count; k0 += hn::Lanes(d)) {
                 hn::Mask<decltype(di)> in_i;
                 const auto j = load_neighbours(di, list, k0, count, in_i);
+                const auto in = hn::RebindMask(d, in_i);
                 const auto j3 = hn::Add(hn::ShiftLeft<1>(j), j);
                 const auto xj = gather3(d, xs, j3);
                 const auto dx = hn::Sub(xix, xj.x), dy = hn::Sub(xiy, xj.y), dz = hn::Sub(xiz, xj.z);
-                const auto in = hn::RebindMask(d, in_i);
                 const auto s = hn::IfThenElseZero(in, k.grad_factor(d, hn::Sqrt(norm2(dx, dy, dz))));
-                const auto rhoj = hn::GatherIndex(d, rho, j);
-                const auto w = weight ? hn::GatherIndex(d, weight, j) : m;
                 // Masked lanes read row 0 (a boundary particle out of the active set has rho = 0,
                 // so p/rho^2 is NaN there): their coefficient is zeroed, not only their gradient.
-                const auto coef = hn::IfThenElseZero(
-                    in, hn::Mul(w, hn::Add(pi, hn::Div(hn::GatherIndex(d, p, j), hn::Mul(rhoj, rhoj)))));
+                const auto coef = hn::IfThenElseZero(in, hn::Mul(weight(j), hn::Add(pi, term(j))));
                 ax = hn::NegMulAdd(coef, hn::Mul(dx, s), ax);
                 ay = hn::NegMulAdd(coef, hn::Mul(dy, s), ay);
                 az = hn::NegMulAdd(coef, hn::Mul(dz, s), az);
             }
         };
-        pairs(a.x, *a.fluid, nullptr, a.rho, a.p);
-        if (a.xb) pairs(a.xb, *a.boundary, a.mass_b, a.rho_b, a.p_b);
+        pairs(a.x, *a.fluid, [&](auto j) { return hn::GatherIndex(d, a.p_term, j); }, [&](auto) { return m; });
+        if (a.xb)
+            pairs(
+                a.xb, *a.boundary,
+                [&](auto j) {
+                    const auto rho = hn::GatherIndex(d, a.rho_b, j);
+                    return hn::Div(hn::GatherIndex(d, a.p_b, j), hn::Mul(rho, rho));
+                },
+                [&](auto j) { return hn::GatherIndex(d, a.mass_b, j); });
+        Real* acc = a.acc + 3 * i;
+        acc[0] = hn::GetLane(hn::SumOfLanes(d, ax));
+        acc[1] = hn::GetLane(hn::SumOfLanes(d, ay));
+        acc[2] = hn::GetLane(hn::SumOfLanes(d, az));
+    }
+}
+
+// Becker & Teschner 2007 eq. 10-11 (nu = 2 alpha h c_s / (2 rho0)) and eq. 13:
+// a_i = -sum_j m Pi_ij grad W_ij - kappa sum_j W_ij x_ij - sum_b rho0 V_b Pi_ib grad W_ib.
+void NonpressureRows(const NonpressurePairArgs& a, std::size_t begin, std::size_t end) {
+    hn::ScalableTag<Real> d;
+    hn::RebindToSigned<decltype(d)> di;
+    const KernelV<decltype(d)> k(d, *a.kernel);
+    const auto m = hn::Set(d, a.mass);
+    const auto rho0 = hn::Set(d, a.rest_density);
+    const auto rho_sum = hn::Set(d, a.rest_density + a.rest_density);
+    const auto eps_h2 = hn::Set(d, Real(0.01) * a.h * a.h);
+    const auto alpha_2hc = hn::Set(d, Real(2) * a.alpha * a.h * a.speed_of_sound);
+    const auto kappa = hn::Set(d, a.kappa);
+    const bool viscous = a.alpha > 0, cohesive = a.kappa > 0;
+    for (std::size_t i = begin; i < end; ++i) {
+        const Real* xi = a.x + 3 * i;
+        const Real* vi = a.v + 3 * i;
+        const auto xix = hn::Set(d, xi[0]), xiy = hn::Set(d, xi[1]), xiz = hn::Set(d, xi[2]);
+        const auto vix = hn::Set(d, vi[0]), viy = hn::Set(d, vi[1]), viz = hn::Set(d, vi[2]);
+        auto ax = hn::Zero(d), ay = hn::Zero(d), az = hn::Zero(d);
+        const Index* list = a.fluid->of(Index(i)).data();
+        const std::size_t count = a.fluid->count[i];
+        for (std::size_t k0 = 0; k0 < count; k0 += hn::Lanes(d)) {
+            hn::Mask<decltype(di)> in_i;
+            const auto j = load_neighbours(di, list, k0, count, in_i);
+            const auto in = hn::RebindMask(d, in_i);
+            const auto j3 = hn::Add(hn::ShiftLeft<1>(j), j);
+            const auto xj = gather3(d, a.x, j3);
+            const auto dx = hn::Sub(xix, xj.x), dy = hn::Sub(xiy, xj.y), dz = hn::Sub(xiz, xj.z);
+            const auto r2 = norm2(dx, dy, dz);
+            const auto r = hn::Sqrt(r2);
+            if (viscous) {
+                const auto vj = gather3(d, a.v, j3);
+                const auto vx = dot3(hn::Sub(vix, vj.x), hn::Sub(viy, vj.y), hn::Sub(viz, vj.z), dx, dy, dz);
+                const auto coef = hn::IfThenElseZero(in, hn::Mul(m, monaghan(vx, r2, alpha_2hc, rho_sum, eps_h2)));
+                const auto s = hn::IfThenElseZero(in, k.grad_factor(d, r));
+                ax = hn::NegMulAdd(coef, hn::Mul(dx, s), ax);
+                ay = hn::NegMulAdd(coef, hn::Mul(dy, s), ay);
+                az = hn::NegMulAdd(coef, hn::Mul(dz, s), az);
+            }
+            if (cohesive) {
+                const auto cw = hn::IfThenElseZero(in, hn::Mul(kappa, k.w(d, r)));
+                ax = hn::NegMulAdd(cw, dx, ax);
+                ay = hn::NegMulAdd(cw, dy, ay);
+                az = hn::NegMulAdd(cw, dz, az);
+            }
+        }
+        if (a.xb && viscous) {
+            const Index* blist = a.boundary->of(Index(i)).data();
+            const std::size_t bcount = a.boundary->count[i];
+            for (std::size_t k0 = 0; k0 < bcount; k0 += hn::Lanes(d)) {
+                hn::Mask<decltype(di)> in_i;
+                const auto b = load_neighbours(di, blist, k0, bcount, in_i);
+                const auto in = hn::RebindMask(d, in_i);
+                const auto b3 = hn::Add(hn::ShiftLeft<1>(b), b);
+                const auto xb = gather3(d, a.xb, b3);
+                const auto dx = hn::Sub(xix, xb.x), dy = hn::Sub(xiy, xb.y), dz = hn::Sub(xiz, xb.z);
+                const auto r2 = norm2(dx, dy, dz);
+                auto vx = vix, vy = viy, vz = viz;  // relative velocity v_i - v_b
+                if (a.vel_b) {
+                    const auto vb = gather3(d, a.vel_b, b3);
+                    vx = hn::Sub(vix, vb.x);
+                    vy = hn::Sub(viy, vb.y);
+                    vz = hn::Sub(viz, vb.z);
+                }
+                const auto psi = hn::Mul(rho0, hn::GatherIndex(d, a.volume_b, b));
+                const auto coef = hn::IfThenElseZero(
+                    in, hn::Mul(psi, monaghan(dot3(vx, vy, vz, dx, dy, dz), r2, alpha_2hc, rho_sum, eps_h2)));
+                const auto s = hn::IfThenElseZero(in, k.grad_factor(d, hn::Sqrt(r2)));
+                ax = hn::NegMulAdd(coef, hn::Mul(dx, s), ax);
+                ay = hn::NegMulAdd(coef, hn::Mul(dy, s), ay);
+                az = hn::NegMulAdd(coef, hn::Mul(dz, s), az);
+            }
+        }
         Real* acc = a.acc + 3 * i;
         acc[0] = hn::GetLane(hn::SumOfLanes(d, ax));
         acc[1] = hn::GetLane(hn::SumOfLanes(d, ay));
@@ -174,6 +258,7 @@ void PressureForceRows(const PressurePairArgs& a, std::size_t begin, std::size_t
 #else
 void ForceRows(const ForcePairArgs&, const Index*, std::size_t, std::size_t) {}
 void PressureForceRows(const PressurePairArgs&, std::size_t, std::size_t) {}
+void NonpressureRows(const NonpressurePairArgs&, std::size_t, std::size_t) {}
 #endif
 
 }  // namespace HWY_NAMESPACE
@@ -184,6 +269,10 @@ HWY_AFTER_NAMESPACE();
 namespace sph {
 HWY_EXPORT(ForceRows);
 HWY_EXPORT(PressureForceRows);
+HWY_EXPORT(NonpressureRows);
+void nonpressure_rows_simd(const NonpressurePairArgs& a, std::size_t begin, std::size_t end) {
+    HWY_DYNAMIC_DISPATCH(NonpressureRows)(a, begin, end);
+}
 void force_rows_simd(const ForcePairArgs& a, const Index* rows, std::size_t begin, std::size_t end) {
     HWY_DYNAMIC_DISPATCH(ForceRows)(a, rows, begin, end);
 }

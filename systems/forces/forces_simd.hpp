@@ -35,9 +35,8 @@ void force_rows_simd(const ForcePairArgs& a, const Index* rows, std::size_t begi
 /// @brief PCISPH's pressure acceleration (Ihmsen et al. 2010 eq. 6 with the boundary's
 /// density and pressure, eq. 9-13), the formulas of PcisphPressureForceSystem's scalar loop.
 struct PressurePairArgs {
-    const Real* x = nullptr;  ///< fluid positions, xyz per particle
-    const Real* rho = nullptr;
-    const Real* p = nullptr;
+    const Real* x = nullptr;       ///< fluid positions, xyz per particle
+    const Real* p_term = nullptr;  ///< p_i / rho_i^2 per fluid particle
     const NeighbourLists* fluid = nullptr;
     const Real* xb = nullptr;  ///< boundary positions (nullptr: no boundary term)
     const Real* mass_b = nullptr;
@@ -48,6 +47,25 @@ struct PressurePairArgs {
     Real mass = 0;
     Real* acc = nullptr;  ///< written: the pressure acceleration, xyz per particle
 };
+
+/// @brief PCISPH's non-pressure accelerations (Becker & Teschner 2007 eq. 10-11 viscosity with
+/// rho_i = rho_j = rho0, Akinci et al. 2012 against the boundary, eq. 13 cohesion), the
+/// formulas of NonpressureForcesSystem's scalar loop.
+struct NonpressurePairArgs {
+    const Real* x = nullptr;  ///< fluid positions, xyz per particle
+    const Real* v = nullptr;  ///< fluid velocities, xyz per particle
+    const NeighbourLists* fluid = nullptr;
+    const Real* xb = nullptr;  ///< boundary positions (nullptr: no boundary term)
+    const Real* volume_b = nullptr;
+    const Real* vel_b = nullptr;  ///< boundary velocities, xyz (nullptr: static walls)
+    const NeighbourLists* boundary = nullptr;
+    const CubicSpline* kernel = nullptr;
+    Real mass = 0, alpha = 0, speed_of_sound = 0, h = 0, rest_density = 0, kappa = 0;
+    Real* acc = nullptr;  ///< written, xyz per particle
+};
+
+/// @brief The non-pressure acceleration of rows [begin, end).
+void nonpressure_rows_simd(const NonpressurePairArgs& a, std::size_t begin, std::size_t end);
 
 /// @brief The pressure acceleration of rows [begin, end).
 void pressure_force_rows_simd(const PressurePairArgs& a, std::size_t begin, std::size_t end);

@@ -14,6 +14,7 @@
 #include "engine/data/world.hpp"
 #include "engine/graph/context.hpp"
 #include "systems/forces/forces_kernels.hpp"
+#include "systems/forces/forces_simd.hpp"
 
 namespace sph {
 
@@ -43,7 +44,28 @@ void NonpressureForcesSystem::run(Context& ctx) {
     const Physics& ph = ctx.physics();
     const Real m = ph.mass, alpha = ph.viscosity, c = ph.speed_of_sound, h = ph.h, rho0 = ph.rest_density;
     const Real kappa = Real(m_surface_tension);
+    // The vectorised loop (simulation.simd) sums the same terms as the scalar loop below.
+    NonpressurePairArgs vec;
+    vec.x = x.empty() ? nullptr : x.data()->data();
+    vec.v = v.empty() ? nullptr : v.data()->data();
+    vec.fluid = &fluid_nb;
+    if (with_boundary) {
+        vec.xb = xb.data()->data();
+        vec.volume_b = vol.data();
+        vec.vel_b = velb.empty() ? nullptr : velb.data()->data();
+        vec.boundary = boundary_nb;
+    }
+    vec.kernel = &kernel;
+    vec.mass = m;
+    vec.alpha = alpha;
+    vec.speed_of_sound = c;
+    vec.h = h;
+    vec.rest_density = rho0;
+    vec.kappa = kappa;
+    vec.acc = out.empty() ? nullptr : out.data()->data();
+    const bool simd = ph.simd;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 512), [&](const auto& r) {
+        if (simd) return nonpressure_rows_simd(vec, r.begin(), r.end());
         for (std::size_t i = r.begin(); i < r.end(); ++i) {
             const Vec3 xi = x[i], vi = v[i];
             Vec3 a = Vec3::Zero();

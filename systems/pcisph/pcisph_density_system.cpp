@@ -25,13 +25,14 @@ constexpr ColumnRef<Vec3> x_pred = fluid(comp::predicted_position);
 Access PcisphDensitySystem::access() const {
     return Access()
         .read(x_pred, res::fluid_neighbours, res::pcisph_delta)
-        .write(fluid(comp::density), fluid(comp::pressure), res::pcisph_errors)
+        .write(fluid(comp::density), fluid(comp::pressure), fluid(comp::pressure_term), res::pcisph_errors)
         .read_if(m_ihmsen, res::boundary_neighbours, boundary(comp::position), boundary(comp::mass));
 }
 
 void PcisphDensitySystem::register_components(World& w) {
     w.fluid.store.add(comp::density);
     w.fluid.store.add(comp::pressure);
+    w.fluid.store.add(comp::pressure_term);
     w.resources.add<PcisphErrors>(res::pcisph_errors.name, Lifetime::Scratch);
 }
 
@@ -45,6 +46,7 @@ void PcisphDensitySystem::run(Context& ctx) {
     const auto xs = ctx.read(fluid(comp::predicted_position));
     auto rho = ctx.write(fluid(comp::density));
     auto p = ctx.write(fluid(comp::pressure));
+    auto p_term = ctx.write(fluid(comp::pressure_term));
     const bool with_boundary = m_ihmsen && ctx.size(SetId::Boundary) > 0;
     const auto xb = with_boundary ? ctx.read(boundary(comp::position)) : std::span<const Vec3>{};
     const std::span<const Real> mb = with_boundary ? ctx.read(boundary(comp::mass)) : std::span<const Real>{};
@@ -86,6 +88,7 @@ void PcisphDensitySystem::run(Context& ctx) {
                 const Real r_i = self + m * sum + bsum;  // eq. 13 (eq. 2 without the boundary)
                 rho[i] = r_i;
                 p[i] = pcisph_pressure_update(p[i], delta, r_i, rho0);  // eq. 3
+                p_term[i] = p[i] / (r_i * r_i);                            // eq. 6's p_i / rho*_i^2
                 const double err = std::max(0.0, double(r_i) / double(rho0) - 1.0);
                 e.sum += err;
                 e.max = std::max(e.max, err);

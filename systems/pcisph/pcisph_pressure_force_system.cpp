@@ -18,7 +18,8 @@ namespace sph {
 
 Access PcisphPressureForceSystem::access() const {
     return Access()
-        .read(fluid(comp::position), fluid(comp::density), fluid(comp::pressure), res::fluid_neighbours)
+        .read(fluid(comp::position), fluid(comp::density), fluid(comp::pressure), fluid(comp::pressure_term),
+              res::fluid_neighbours)
         .write(fluid(comp::pressure_acceleration))
         .read_if(m_ihmsen, res::boundary_neighbours, boundary(comp::position), boundary(comp::mass),
                  boundary(comp::density), boundary(comp::pressure));
@@ -46,8 +47,7 @@ void PcisphPressureForceSystem::run(Context& ctx) {
     // The vectorised loop (simulation.simd) sums the same terms as the scalar loop below.
     PressurePairArgs vec;
     vec.x = x.empty() ? nullptr : x.data()->data();
-    vec.rho = rho.data();
-    vec.p = p.data();
+    vec.p_term = ctx.read(fluid(comp::pressure_term)).data();
     vec.fluid = &fluid_nb;
     if (with_boundary) {
         vec.xb = xb.data()->data();
