@@ -74,6 +74,43 @@ HWY_INLINE hn::Vec<DI> load_neighbours(DI di, const Index* list, std::size_t k, 
     return hn::IfThenElseZero(in, hn::LoadU(di, reinterpret_cast<const std::int32_t*>(list) + k));
 }
 
+/// @brief A particle's position (or velocity) broadcast to every lane.
+template <class D>
+struct Broadcast3 {
+    hn::Vec<D> x, y, z;
+};
+template <class D>
+HWY_INLINE Broadcast3<D> broadcast3(D d, const Real* xyz) {
+    return {hn::Set(d, xyz[0]), hn::Set(d, xyz[1]), hn::Set(d, xyz[2])};
+}
+
+/// @brief The xyz rows `base + 3 j` of a column of Vec3, one gather per component.
+template <class D, class VI>
+HWY_INLINE Broadcast3<D> gather3(D d, const Real* base, VI j3) {
+    return {hn::GatherIndex(d, base, j3), hn::GatherIndex(d, base + 1, j3), hn::GatherIndex(d, base + 2, j3)};
+}
+
+/// @brief One vector of a particle's neighbour list [k0, k0 + lanes): the neighbours j (lanes at
+/// or past `count` masked off by `in` and reading row 0), 3 j for the xyz gathers, and
+/// x_i - x_j with its squared length.
+template <class D>
+struct PairChunk {
+    hn::Vec<hn::RebindToSigned<D>> j, j3;
+    hn::Mask<D> in;
+    hn::Vec<D> dx, dy, dz, r2;
+};
+template <class D>
+HWY_INLINE PairChunk<D> pair_chunk(D d, const Real* xs, const Broadcast3<D>& xi, const Index* list, std::size_t k0,
+                                   std::size_t count) {
+    const hn::RebindToSigned<D> di;
+    hn::Mask<decltype(di)> in;
+    const auto j = load_neighbours(di, list, k0, count, in);
+    const auto j3 = hn::Add(hn::ShiftLeft<1>(j), j);
+    const Broadcast3<D> xj = gather3(d, xs, j3);
+    const auto dx = hn::Sub(xi.x, xj.x), dy = hn::Sub(xi.y, xj.y), dz = hn::Sub(xi.z, xj.z);
+    return {j, j3, hn::RebindMask(d, in), dx, dy, dz, norm2(dx, dy, dz)};
+}
+
 }  // namespace HWY_NAMESPACE
 }  // namespace sph
 HWY_AFTER_NAMESPACE();

@@ -21,21 +21,14 @@ namespace hn = hwy::HWY_NAMESPACE;
 /// sum_j w_j W(|x_i - x_j|) over one list (w_j = 1 without weights), positions gathered from
 /// the xyz rows at `x`.
 template <class D>
-HWY_INLINE Real kernel_sum(D d, const KernelV<D>& k, const Real* x, const Real* xi, const Index* list,
+HWY_INLINE Real kernel_sum(D d, const KernelV<D>& k, const Real* x, const Broadcast3<D>& xi, const Index* list,
                            std::size_t count, const Real* weight) {
-    const hn::RebindToSigned<D> di;
-    const auto vx = hn::Set(d, xi[0]), vy = hn::Set(d, xi[1]), vz = hn::Set(d, xi[2]);
     auto sum = hn::Zero(d);
     for (std::size_t k0 = 0; k0 < count; k0 += hn::Lanes(d)) {
-        hn::Mask<decltype(di)> in;
-        const auto j = load_neighbours(di, list, k0, count, in);
-        const auto j3 = hn::Add(hn::ShiftLeft<1>(j), j);
-        const auto dx = hn::Sub(vx, hn::GatherIndex(d, x, j3));
-        const auto dy = hn::Sub(vy, hn::GatherIndex(d, x + 1, j3));
-        const auto dz = hn::Sub(vz, hn::GatherIndex(d, x + 2, j3));
-        auto w = k.w(d, hn::Sqrt(norm2(dx, dy, dz)));
-        if (weight) w = hn::Mul(hn::GatherIndex(d, weight, j), w);
-        sum = hn::Add(sum, hn::IfThenElseZero(hn::RebindMask(d, in), w));
+        const PairChunk<D> c = pair_chunk(d, x, xi, list, k0, count);
+        auto w = k.w(d, hn::Sqrt(c.r2));
+        if (weight) w = hn::Mul(hn::GatherIndex(d, weight, c.j), w);
+        sum = hn::Add(sum, hn::IfThenElseZero(c.in, w));
     }
     return hn::GetLane(hn::SumOfLanes(d, sum));
 }
@@ -46,7 +39,7 @@ void KernelSums(const KernelSumArgs& a, const Index* rows, std::size_t begin, st
     const KernelV<decltype(d)> k(d, *a.kernel);
     for (std::size_t q = begin; q < end; ++q) {
         const Index i = rows ? rows[q] : Index(q);
-        const Real* xi = a.x + 3 * std::size_t(i);
+        const Broadcast3<decltype(d)> xi = broadcast3(d, a.x + 3 * std::size_t(i));
         fluid_sum[q - begin] = kernel_sum(d, k, a.x, xi, a.fluid->of(i).data(), a.fluid->count[i], nullptr);
         if (a.xb)
             boundary_sum[q - begin] =

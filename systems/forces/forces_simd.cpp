@@ -21,15 +21,6 @@ namespace HWY_NAMESPACE {
 namespace hn = hwy::HWY_NAMESPACE;
 
 #ifndef SPH_DOUBLE
-template <class D>
-struct Gathered3 {
-    hn::Vec<D> x, y, z;
-};
-template <class D, class VI>
-HWY_INLINE Gathered3<D> gather3(D d, const Real* base, VI j3) {
-    return {hn::GatherIndex(d, base, j3), hn::GatherIndex(d, base + 1, j3), hn::GatherIndex(d, base + 2, j3)};
-}
-
 /// Monaghan's Pi for approaching pairs (v.x < 0), zero otherwise (monaghan_pi).
 template <class V>
 HWY_INLINE V monaghan(V vx, V r2, V alpha_2hc, V rho_sum, V eps_h2) {
@@ -38,10 +29,39 @@ HWY_INLINE V monaghan(V vx, V r2, V alpha_2hc, V rho_sum, V eps_h2) {
     return hn::IfThenElseZero(hn::Lt(vx, hn::Zero(hn::DFromV<V>())), pi);
 }
 
+/// a -= coef (x_ij s) per component; returns x_ij s (grad W_ij). Masked lanes must carry a zero
+/// coefficient *and* a zero s: they read row 0, whose values may be anything (a zero gradient
+/// alone would give 0 * inf = NaN; an inactive PCISPH boundary particle has p/rho^2 = NaN).
+template <class D>
+HWY_INLINE Broadcast3<D> subtract_along_gradient(const PairChunk<D>& c, hn::Vec<D> s, hn::Vec<D> coef,
+                                                 Broadcast3<D>& a) {
+    const Broadcast3<D> g{hn::Mul(c.dx, s), hn::Mul(c.dy, s), hn::Mul(c.dz, s)};
+    a.x = hn::NegMulAdd(coef, g.x, a.x);
+    a.y = hn::NegMulAdd(coef, g.y, a.y);
+    a.z = hn::NegMulAdd(coef, g.z, a.z);
+    return g;
+}
+
+/// Writes the lane sums of a (plus g) to the xyz row `out`.
+template <class D>
+HWY_INLINE void store_sum3(D d, const Broadcast3<D>& a, const Real* g, Real* out) {
+    out[0] = hn::GetLane(hn::SumOfLanes(d, a.x)) + (g ? g[0] : Real(0));
+    out[1] = hn::GetLane(hn::SumOfLanes(d, a.y)) + (g ? g[1] : Real(0));
+    out[2] = hn::GetLane(hn::SumOfLanes(d, a.z)) + (g ? g[2] : Real(0));
+}
+
+/// v_i - v_j of the chunk's neighbours (velocities gathered from the xyz rows at `v`; none: v_i).
+template <class D>
+HWY_INLINE Broadcast3<D> relative_velocity(D d, const Broadcast3<D>& vi, const Real* v, const PairChunk<D>& c) {
+    if (!v) return vi;
+    const Broadcast3<D> vj = gather3(d, v, c.j3);
+    return {hn::Sub(vi.x, vj.x), hn::Sub(vi.y, vj.y), hn::Sub(vi.z, vj.z)};
+}
+
 void ForceRows(const ForcePairArgs& a, const Index* rows, std::size_t begin, std::size_t end) {
     hn::ScalableTag<Real> d;
-    hn::RebindToSigned<decltype(d)> di;
-    const KernelV<decltype(d)> k(d, *a.kernel);
+    using D = decltype(d);
+    const KernelV<D> k(d, *a.kernel);
     const auto m = hn::Set(d, a.mass);
     const auto rho0 = hn::Set(d, a.rest_density);
     const auto eps_h2 = hn::Set(d, Real(0.01) * a.h * a.h);
@@ -51,79 +71,46 @@ void ForceRows(const ForcePairArgs& a, const Index* rows, std::size_t begin, std
     const bool viscous = a.alpha > 0, viscous_b = a.alpha_b > 0;
     for (std::size_t q = begin; q < end; ++q) {
         const Index i = rows ? rows[q] : Index(q);
-        const Real* xi = a.x + 3 * std::size_t(i);
-        const Real* vi = a.v + 3 * std::size_t(i);
+        const Broadcast3<D> xi = broadcast3(d, a.x + 3 * std::size_t(i));
+        const Broadcast3<D> vi = broadcast3(d, a.v + 3 * std::size_t(i));
         const Real rhoi = a.rho[i];
-        const Real pi_s = a.p[i] / (rhoi * rhoi);
+        const Real pi_s = a.p[i] / (rhoi * rhoi);  // hoisted: p_i / rho_i^2
         const auto pi = hn::Set(d, pi_s);
         const auto vrhoi = hn::Set(d, rhoi);
-        const auto xix = hn::Set(d, xi[0]), xiy = hn::Set(d, xi[1]), xiz = hn::Set(d, xi[2]);
-        const auto vix = hn::Set(d, vi[0]), viy = hn::Set(d, vi[1]), viz = hn::Set(d, vi[2]);
-        auto ax = hn::Zero(d), ay = hn::Zero(d), az = hn::Zero(d), div = hn::Zero(d);
+        Broadcast3<D> acc{hn::Zero(d), hn::Zero(d), hn::Zero(d)};
+        auto div = hn::Zero(d);
         const Index* list = a.fluid->of(i).data();
         const std::size_t count = a.fluid->count[i];
         for (std::size_t k0 = 0; k0 < count; k0 += hn::Lanes(d)) {
-            hn::Mask<decltype(di)> in_i;
-            const auto j = load_neighbours(di, list, k0, count, in_i);
-            const auto in = hn::RebindMask(d, in_i);
-            const auto j3 = hn::Add(hn::ShiftLeft<1>(j), j);
-            const auto xj = gather3(d, a.x, j3);
-            const auto dx = hn::Sub(xix, xj.x), dy = hn::Sub(xiy, xj.y), dz = hn::Sub(xiz, xj.z);
-            const auto r2 = norm2(dx, dy, dz);
-            // Masked lanes get a zero gradient, so they add nothing below.
-            const auto s = hn::IfThenElseZero(in, k.grad_factor(d, hn::Sqrt(r2)));
-            const auto gx = hn::Mul(dx, s), gy = hn::Mul(dy, s), gz = hn::Mul(dz, s);
-            const auto vj = gather3(d, a.v, j3);
-            const auto vx = hn::Sub(vix, vj.x), vy = hn::Sub(viy, vj.y), vz = hn::Sub(viz, vj.z);
-            const auto rhoj = hn::GatherIndex(d, a.rho, j);
-            const auto pj = hn::GatherIndex(d, a.p, j);
-            auto coef = hn::Add(pi, hn::Div(pj, hn::Mul(rhoj, rhoj)));
+            const PairChunk<D> c = pair_chunk(d, a.x, xi, list, k0, count);
+            const auto s = hn::IfThenElseZero(c.in, k.grad_factor(d, hn::Sqrt(c.r2)));
+            const Broadcast3<D> vij = relative_velocity(d, vi, a.v, c);
+            const auto rhoj = hn::GatherIndex(d, a.rho, c.j);
+            auto coef = hn::Add(pi, hn::Div(hn::GatherIndex(d, a.p, c.j), hn::Mul(rhoj, rhoj)));
             if (viscous)
-                coef = hn::Add(coef, monaghan(dot3(vx, vy, vz, dx, dy, dz), r2, alpha_2hc, hn::Add(vrhoi, rhoj), eps_h2));
-            // Masked lanes read row 0, whose values may be anything: their coefficient is zeroed
-            // (a zero gradient alone would give 0 * inf = NaN).
-            coef = hn::IfThenElseZero(in, hn::Mul(m, coef));
-            ax = hn::NegMulAdd(coef, gx, ax);
-            ay = hn::NegMulAdd(coef, gy, ay);
-            az = hn::NegMulAdd(coef, gz, az);
-            if (a.drho) div = hn::MulAdd(m, dot3(vx, vy, vz, gx, gy, gz), div);  // gx.. are 0 in masked lanes
+                coef = hn::Add(coef, monaghan(dot3(vij.x, vij.y, vij.z, c.dx, c.dy, c.dz), c.r2, alpha_2hc,
+                                              hn::Add(vrhoi, rhoj), eps_h2));
+            const Broadcast3<D> g = subtract_along_gradient(c, s, hn::IfThenElseZero(c.in, hn::Mul(m, coef)), acc);
+            if (a.drho) div = hn::MulAdd(m, dot3(vij.x, vij.y, vij.z, g.x, g.y, g.z), div);
         }
         if (a.xb) {
             const Index* blist = a.boundary->of(i).data();
             const std::size_t bcount = a.boundary->count[i];
             const auto two_pi = hn::Set(d, Real(2) * pi_s);
             for (std::size_t k0 = 0; k0 < bcount; k0 += hn::Lanes(d)) {
-                hn::Mask<decltype(di)> in_i;
-                const auto b = load_neighbours(di, blist, k0, bcount, in_i);
-                const auto in = hn::RebindMask(d, in_i);
-                const auto b3 = hn::Add(hn::ShiftLeft<1>(b), b);
-                const auto xb = gather3(d, a.xb, b3);
-                const auto dx = hn::Sub(xix, xb.x), dy = hn::Sub(xiy, xb.y), dz = hn::Sub(xiz, xb.z);
-                const auto r2 = norm2(dx, dy, dz);
-                const auto s = hn::IfThenElseZero(in, k.grad_factor(d, hn::Sqrt(r2)));
-                const auto gx = hn::Mul(dx, s), gy = hn::Mul(dy, s), gz = hn::Mul(dz, s);
-                auto vx = vix, vy = viy, vz = viz;  // relative velocity v_i - v_b
-                if (a.vel_b) {
-                    const auto vb = gather3(d, a.vel_b, b3);
-                    vx = hn::Sub(vix, vb.x);
-                    vy = hn::Sub(viy, vb.y);
-                    vz = hn::Sub(viz, vb.z);
-                }
+                const PairChunk<D> c = pair_chunk(d, a.xb, xi, blist, k0, bcount);
+                const auto s = hn::IfThenElseZero(c.in, k.grad_factor(d, hn::Sqrt(c.r2)));
+                const Broadcast3<D> vib = relative_velocity(d, vi, a.vel_b, c);  // v_i - v_b
                 auto coef = two_pi;
                 if (viscous_b)
-                    coef = hn::Add(coef, monaghan(dot3(vx, vy, vz, dx, dy, dz), r2, alpha_b_2hc, hn::Add(vrhoi, rho0), eps_h2));
-                const auto psi = hn::Mul(rho0, hn::GatherIndex(d, a.volume_b, b));
-                coef = hn::IfThenElseZero(in, hn::Mul(psi, coef));
-                ax = hn::NegMulAdd(coef, gx, ax);
-                ay = hn::NegMulAdd(coef, gy, ay);
-                az = hn::NegMulAdd(coef, gz, az);
-                if (a.drho) div = hn::MulAdd(psi, dot3(vx, vy, vz, gx, gy, gz), div);
+                    coef = hn::Add(coef, monaghan(dot3(vib.x, vib.y, vib.z, c.dx, c.dy, c.dz), c.r2, alpha_b_2hc,
+                                                  hn::Add(vrhoi, rho0), eps_h2));
+                const auto psi = hn::Mul(rho0, hn::GatherIndex(d, a.volume_b, c.j));
+                const Broadcast3<D> g = subtract_along_gradient(c, s, hn::IfThenElseZero(c.in, hn::Mul(psi, coef)), acc);
+                if (a.drho) div = hn::MulAdd(psi, dot3(vib.x, vib.y, vib.z, g.x, g.y, g.z), div);
             }
         }
-        Real* acc = a.acc + 3 * std::size_t(i);
-        acc[0] = hn::GetLane(hn::SumOfLanes(d, ax)) + a.gravity[0];
-        acc[1] = hn::GetLane(hn::SumOfLanes(d, ay)) + a.gravity[1];
-        acc[2] = hn::GetLane(hn::SumOfLanes(d, az)) + a.gravity[2];
+        store_sum3(d, acc, a.gravity, a.acc + 3 * std::size_t(i));
         if (a.drho) a.drho[i] = hn::GetLane(hn::SumOfLanes(d, div));
     }
 }
@@ -132,32 +119,21 @@ void ForceRows(const ForcePairArgs& a, const Index* rows, std::size_t begin, std
 //                                 -sum_b m_b (p_i/rho_i^2 + p_b/rho_b^2) grad W_ib.
 void PressureForceRows(const PressurePairArgs& a, std::size_t begin, std::size_t end) {
     hn::ScalableTag<Real> d;
-    hn::RebindToSigned<decltype(d)> di;
-    const KernelV<decltype(d)> k(d, *a.kernel);
+    using D = decltype(d);
+    const KernelV<D> k(d, *a.kernel);
     const auto m = hn::Set(d, a.mass);
     for (std::size_t i = begin; i < end; ++i) {
-        const Real* xi = a.x + 3 * i;
+        const Broadcast3<D> xi = broadcast3(d, a.x + 3 * i);
         const auto pi = hn::Set(d, a.p_term[i]);
-        const auto xix = hn::Set(d, xi[0]), xiy = hn::Set(d, xi[1]), xiz = hn::Set(d, xi[2]);
-        auto ax = hn::Zero(d), ay = hn::Zero(d), az = hn::Zero(d);
-        // term(j): p_j / rho_j^2 of neighbour lanes j; weight(j): m_j.
+        Broadcast3<D> acc{hn::Zero(d), hn::Zero(d), hn::Zero(d)};
+        // term(j): p_j / rho_j^2 of the chunk's neighbours; weight(j): m_j.
         auto pairs = [&](const Real* xs, const NeighbourLists& lists, auto&& term, auto&& weight) {
             const Index* list = lists.of(Index(i)).data();
             const std::size_t count = lists.count[i];
             for (std::size_t k0 = 0; k0 < count; k0 += hn::Lanes(d)) {
-                hn::Mask<decltype(di)> in_i;
-                const auto j = load_neighbours(di, list, k0, count, in_i);
-                const auto in = hn::RebindMask(d, in_i);
-                const auto j3 = hn::Add(hn::ShiftLeft<1>(j), j);
-                const auto xj = gather3(d, xs, j3);
-                const auto dx = hn::Sub(xix, xj.x), dy = hn::Sub(xiy, xj.y), dz = hn::Sub(xiz, xj.z);
-                const auto s = hn::IfThenElseZero(in, k.grad_factor(d, hn::Sqrt(norm2(dx, dy, dz))));
-                // Masked lanes read row 0 (a boundary particle out of the active set has rho = 0,
-                // so p/rho^2 is NaN there): their coefficient is zeroed, not only their gradient.
-                const auto coef = hn::IfThenElseZero(in, hn::Mul(weight(j), hn::Add(pi, term(j))));
-                ax = hn::NegMulAdd(coef, hn::Mul(dx, s), ax);
-                ay = hn::NegMulAdd(coef, hn::Mul(dy, s), ay);
-                az = hn::NegMulAdd(coef, hn::Mul(dz, s), az);
+                const PairChunk<D> c = pair_chunk(d, xs, xi, list, k0, count);
+                const auto s = hn::IfThenElseZero(c.in, k.grad_factor(d, hn::Sqrt(c.r2)));
+                subtract_along_gradient(c, s, hn::IfThenElseZero(c.in, hn::Mul(weight(c.j), hn::Add(pi, term(c.j)))), acc);
             }
         };
         pairs(a.x, *a.fluid, [&](auto j) { return hn::GatherIndex(d, a.p_term, j); }, [&](auto) { return m; });
@@ -169,10 +145,7 @@ void PressureForceRows(const PressurePairArgs& a, std::size_t begin, std::size_t
                     return hn::Div(hn::GatherIndex(d, a.p_b, j), hn::Mul(rho, rho));
                 },
                 [&](auto j) { return hn::GatherIndex(d, a.mass_b, j); });
-        Real* acc = a.acc + 3 * i;
-        acc[0] = hn::GetLane(hn::SumOfLanes(d, ax));
-        acc[1] = hn::GetLane(hn::SumOfLanes(d, ay));
-        acc[2] = hn::GetLane(hn::SumOfLanes(d, az));
+        store_sum3(d, acc, nullptr, a.acc + 3 * i);
     }
 }
 
@@ -180,8 +153,8 @@ void PressureForceRows(const PressurePairArgs& a, std::size_t begin, std::size_t
 // a_i = -sum_j m Pi_ij grad W_ij - kappa sum_j W_ij x_ij - sum_b rho0 V_b Pi_ib grad W_ib.
 void NonpressureRows(const NonpressurePairArgs& a, std::size_t begin, std::size_t end) {
     hn::ScalableTag<Real> d;
-    hn::RebindToSigned<decltype(d)> di;
-    const KernelV<decltype(d)> k(d, *a.kernel);
+    using D = decltype(d);
+    const KernelV<D> k(d, *a.kernel);
     const auto m = hn::Set(d, a.mass);
     const auto rho0 = hn::Set(d, a.rest_density);
     const auto rho_sum = hn::Set(d, a.rest_density + a.rest_density);
@@ -190,69 +163,37 @@ void NonpressureRows(const NonpressurePairArgs& a, std::size_t begin, std::size_
     const auto kappa = hn::Set(d, a.kappa);
     const bool viscous = a.alpha > 0, cohesive = a.kappa > 0;
     for (std::size_t i = begin; i < end; ++i) {
-        const Real* xi = a.x + 3 * i;
-        const Real* vi = a.v + 3 * i;
-        const auto xix = hn::Set(d, xi[0]), xiy = hn::Set(d, xi[1]), xiz = hn::Set(d, xi[2]);
-        const auto vix = hn::Set(d, vi[0]), viy = hn::Set(d, vi[1]), viz = hn::Set(d, vi[2]);
-        auto ax = hn::Zero(d), ay = hn::Zero(d), az = hn::Zero(d);
+        const Broadcast3<D> xi = broadcast3(d, a.x + 3 * i);
+        const Broadcast3<D> vi = broadcast3(d, a.v + 3 * i);
+        Broadcast3<D> acc{hn::Zero(d), hn::Zero(d), hn::Zero(d)};
         const Index* list = a.fluid->of(Index(i)).data();
         const std::size_t count = a.fluid->count[i];
         for (std::size_t k0 = 0; k0 < count; k0 += hn::Lanes(d)) {
-            hn::Mask<decltype(di)> in_i;
-            const auto j = load_neighbours(di, list, k0, count, in_i);
-            const auto in = hn::RebindMask(d, in_i);
-            const auto j3 = hn::Add(hn::ShiftLeft<1>(j), j);
-            const auto xj = gather3(d, a.x, j3);
-            const auto dx = hn::Sub(xix, xj.x), dy = hn::Sub(xiy, xj.y), dz = hn::Sub(xiz, xj.z);
-            const auto r2 = norm2(dx, dy, dz);
-            const auto r = hn::Sqrt(r2);
+            const PairChunk<D> c = pair_chunk(d, a.x, xi, list, k0, count);
+            const auto r = hn::Sqrt(c.r2);
             if (viscous) {
-                const auto vj = gather3(d, a.v, j3);
-                const auto vx = dot3(hn::Sub(vix, vj.x), hn::Sub(viy, vj.y), hn::Sub(viz, vj.z), dx, dy, dz);
-                const auto coef = hn::IfThenElseZero(in, hn::Mul(m, monaghan(vx, r2, alpha_2hc, rho_sum, eps_h2)));
-                const auto s = hn::IfThenElseZero(in, k.grad_factor(d, r));
-                ax = hn::NegMulAdd(coef, hn::Mul(dx, s), ax);
-                ay = hn::NegMulAdd(coef, hn::Mul(dy, s), ay);
-                az = hn::NegMulAdd(coef, hn::Mul(dz, s), az);
+                const Broadcast3<D> vij = relative_velocity(d, vi, a.v, c);
+                const auto vx = dot3(vij.x, vij.y, vij.z, c.dx, c.dy, c.dz);
+                const auto coef = hn::IfThenElseZero(c.in, hn::Mul(m, monaghan(vx, c.r2, alpha_2hc, rho_sum, eps_h2)));
+                subtract_along_gradient(c, hn::IfThenElseZero(c.in, k.grad_factor(d, r)), coef, acc);
             }
-            if (cohesive) {
-                const auto cw = hn::IfThenElseZero(in, hn::Mul(kappa, k.w(d, r)));
-                ax = hn::NegMulAdd(cw, dx, ax);
-                ay = hn::NegMulAdd(cw, dy, ay);
-                az = hn::NegMulAdd(cw, dz, az);
-            }
+            if (cohesive)  // a -= kappa W_ij x_ij: the "gradient" factor is 1
+                subtract_along_gradient(c, hn::Set(d, Real(1)), hn::IfThenElseZero(c.in, hn::Mul(kappa, k.w(d, r))), acc);
         }
         if (a.xb && viscous) {
             const Index* blist = a.boundary->of(Index(i)).data();
             const std::size_t bcount = a.boundary->count[i];
             for (std::size_t k0 = 0; k0 < bcount; k0 += hn::Lanes(d)) {
-                hn::Mask<decltype(di)> in_i;
-                const auto b = load_neighbours(di, blist, k0, bcount, in_i);
-                const auto in = hn::RebindMask(d, in_i);
-                const auto b3 = hn::Add(hn::ShiftLeft<1>(b), b);
-                const auto xb = gather3(d, a.xb, b3);
-                const auto dx = hn::Sub(xix, xb.x), dy = hn::Sub(xiy, xb.y), dz = hn::Sub(xiz, xb.z);
-                const auto r2 = norm2(dx, dy, dz);
-                auto vx = vix, vy = viy, vz = viz;  // relative velocity v_i - v_b
-                if (a.vel_b) {
-                    const auto vb = gather3(d, a.vel_b, b3);
-                    vx = hn::Sub(vix, vb.x);
-                    vy = hn::Sub(viy, vb.y);
-                    vz = hn::Sub(viz, vb.z);
-                }
-                const auto psi = hn::Mul(rho0, hn::GatherIndex(d, a.volume_b, b));
+                const PairChunk<D> c = pair_chunk(d, a.xb, xi, blist, k0, bcount);
+                const Broadcast3<D> vib = relative_velocity(d, vi, a.vel_b, c);  // v_i - v_b
+                const auto psi = hn::Mul(rho0, hn::GatherIndex(d, a.volume_b, c.j));
                 const auto coef = hn::IfThenElseZero(
-                    in, hn::Mul(psi, monaghan(dot3(vx, vy, vz, dx, dy, dz), r2, alpha_2hc, rho_sum, eps_h2)));
-                const auto s = hn::IfThenElseZero(in, k.grad_factor(d, hn::Sqrt(r2)));
-                ax = hn::NegMulAdd(coef, hn::Mul(dx, s), ax);
-                ay = hn::NegMulAdd(coef, hn::Mul(dy, s), ay);
-                az = hn::NegMulAdd(coef, hn::Mul(dz, s), az);
+                    c.in, hn::Mul(psi, monaghan(dot3(vib.x, vib.y, vib.z, c.dx, c.dy, c.dz), c.r2, alpha_2hc, rho_sum,
+                                                eps_h2)));
+                subtract_along_gradient(c, hn::IfThenElseZero(c.in, k.grad_factor(d, hn::Sqrt(c.r2))), coef, acc);
             }
         }
-        Real* acc = a.acc + 3 * i;
-        acc[0] = hn::GetLane(hn::SumOfLanes(d, ax));
-        acc[1] = hn::GetLane(hn::SumOfLanes(d, ay));
-        acc[2] = hn::GetLane(hn::SumOfLanes(d, az));
+        store_sum3(d, acc, nullptr, a.acc + 3 * i);
     }
 }
 #else
