@@ -77,6 +77,30 @@ std::size_t NeighbourLists::total() const {
         std::plus<>());
 }
 
+void CandidateCache::fill(const UniformGrid& grid, const Vec3& at, std::int64_t at_cell) {
+    const CandidateRanges ranges = grid.candidate_ranges(at);
+    cell = at_cell;
+    count = ranges.total;
+    const std::size_t size = count + UniformGrid::kPadding;
+    for (auto* axis : {&x, &y, &z}) {
+        if (axis->size() < size) axis->resize(size);
+        std::fill(axis->begin() + std::ptrdiff_t(count), axis->begin() + std::ptrdiff_t(size),
+                  std::numeric_limits<Real>::max());
+    }
+    if (index.size() < size) index.resize(size);
+    std::fill(index.begin() + std::ptrdiff_t(count), index.begin() + std::ptrdiff_t(size), Index(0));
+    const Index* sorted_index = grid.sorted_index().data();
+    std::size_t k = 0;
+    for (int r = 0; r < ranges.count; ++r) {
+        const std::size_t b = ranges.begin[r], n = ranges.end[r] - ranges.begin[r];
+        std::copy_n(grid.sorted_x() + b, n, x.begin() + std::ptrdiff_t(k));
+        std::copy_n(grid.sorted_y() + b, n, y.begin() + std::ptrdiff_t(k));
+        std::copy_n(grid.sorted_z() + b, n, z.begin() + std::ptrdiff_t(k));
+        std::copy_n(sorted_index + b, n, index.begin() + std::ptrdiff_t(k));
+        k += n;
+    }
+}
+
 namespace {
 
 constexpr Index kNoSelf = ~Index(0);
@@ -85,23 +109,27 @@ constexpr Index kNoSelf = ~Index(0);
 /// every candidate is written and the cursor advances only when it is in range (the in-range
 /// test is a coin toss for about half the candidates once the start lattice has become
 /// disordered, and a branch mispredicts on it).
-Index filter_scalar(const UniformGrid& grid, const CandidateRanges& ranges, const Vec3& xi, Index self, Real r2,
-                    Index* dst) {
-    const Index* sorted_index = grid.sorted_index().data();
-    const Real *sx = grid.sorted_x(), *sy = grid.sorted_y(), *sz = grid.sorted_z();
+Index filter_scalar(const CandidateCache& cache, const Vec3& xi, Index self, Real r2, Index* dst) {
     Index c = 0;
-    for (int r = 0; r < ranges.count; ++r)
-        for (Index k = ranges.begin[r]; k < ranges.end[r]; ++k) {
-            const Index j = sorted_index[k];
-            dst[c] = j;
-            c += Index((xi - Vec3(sx[k], sy[k], sz[k])).squaredNorm() < r2) & Index(j != self);
-        }
+    for (std::size_t k = 0; k < cache.count; ++k) {
+        const Index j = cache.index[k];
+        dst[c] = j;
+        c += Index((xi - Vec3(cache.x[k], cache.y[k], cache.z[k])).squaredNorm() < r2) & Index(j != self);
+    }
     return c;
 }
 
-Index filter(const UniformGrid& grid, const CandidateRanges& ranges, const Vec3& xi, Index self, Real r2, Index* dst,
-             bool simd) {
-    return simd ? filter_candidates_simd(grid, ranges, xi, self, r2, dst) : filter_scalar(grid, ranges, xi, self, r2, dst);
+/// The list of query xi from the candidates of its cell (cache_for has filled `cache`).
+Index filter(const CandidateCache& cache, const Vec3& xi, Index self, Real r2, Index* dst, bool simd) {
+    if (cache.count == 0) return 0;
+    return simd ? filter_candidates_simd(cache, xi, self, r2, dst) : filter_scalar(cache, xi, self, r2, dst);
+}
+
+/// The cache of the query's cell, refilled when the query moved to another cell.
+CandidateCache& cache_for(const UniformGrid& grid, CandidateCache& cache, const Vec3& xi) {
+    const std::int64_t cell = grid.cell_of(xi);
+    if (cell != cache.cell) cache.fill(grid, xi, cell);
+    return cache;
 }
 
 /// Every list, back to back per block of query particles, written straight into the block
@@ -115,21 +143,23 @@ void build_compact(const UniformGrid& grid, std::span<const Vec3> query_position
     lists.count.resize(n);
     lists.start.resize(n);
     lists.blocks.resize((n + B - 1) / B);
+    tbb::enumerable_thread_specific<CandidateCache> caches;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, lists.blocks.size(), 1), [&](const auto& r) {
+        CandidateCache& cache = caches.local();
         for (std::size_t b = r.begin(); b < r.end(); ++b) {
             std::vector<Index>& buf = lists.blocks[b];
             std::size_t used = 0;
             for (std::size_t i = b * B; i < std::min(n, (b + 1) * B); ++i) {
                 const Vec3 xi = query_positions[i];
-                const CandidateRanges ranges = grid.candidate_ranges(xi);
+                cache_for(grid, cache, xi);
                 // Room for every candidate plus a vector of slack (the vectorised filter's
                 // whole-vector stores, and the readers' whole-vector loads).
-                const std::size_t need = used + ranges.total + NeighbourLists::kSlack;
+                const std::size_t need = used + cache.count + NeighbourLists::kSlack;
                 if (buf.size() < need) {  // grows by an eighth: a block's lists change little per step
                     buf.reserve(std::max(need, buf.size() + buf.size() / 8));
                     buf.resize(buf.capacity());
                 }
-                const Index c = filter(grid, ranges, xi, exclude_self ? Index(i) : kNoSelf, r2, buf.data() + used, simd);
+                const Index c = filter(cache, xi, exclude_self ? Index(i) : kNoSelf, r2, buf.data() + used, simd);
                 lists.start[i] = Index(used);
                 lists.count[i] = c;
                 used += c;
@@ -171,16 +201,18 @@ void build_slab(const UniformGrid& grid, std::span<const Vec3> query_positions, 
         std::atomic<Index> overflow{0};
         const Index cap = lists.capacity;
         tbb::enumerable_thread_specific<std::vector<Index>> scratch;
+        tbb::enumerable_thread_specific<CandidateCache> caches;
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m, 256), [&](const auto& r) {
             Index local_max = 0;
             std::vector<Index>& found = scratch.local();
+            CandidateCache& cache = caches.local();
             for (std::size_t q = r.begin(); q < r.end(); ++q) {
                 const Index i = subset.all ? Index(q) : subset.indices[q];
                 const Vec3 xi = query_positions[i];
-                const CandidateRanges ranges = grid.candidate_ranges(xi);
-                if (found.size() < ranges.total + NeighbourLists::kSlack)
-                    found.resize(2 * ranges.total + NeighbourLists::kSlack);
-                const Index c = filter(grid, ranges, xi, exclude_self ? i : kNoSelf, r2, found.data(), simd);
+                cache_for(grid, cache, xi);
+                if (found.size() < cache.count + NeighbourLists::kSlack)
+                    found.resize(2 * cache.count + NeighbourLists::kSlack);
+                const Index c = filter(cache, xi, exclude_self ? i : kNoSelf, r2, found.data(), simd);
                 std::copy_n(found.data(), std::min(c, cap), lists.indices.data() + std::size_t(i) * cap);
                 lists.count[i] = c;
                 local_max = std::max(local_max, c);

@@ -51,6 +51,8 @@ public:
     std::int64_t cell_index(const Eigen::Vector3i& c) const {
         return c[0] + std::int64_t(m_dims[0]) * (c[1] + std::int64_t(m_dims[1]) * c[2]);
     }
+    /// @brief The cell a point falls in (clamped to the grid).
+    std::int64_t cell_of(const Vec3& x) const { return cell_index(cell_coords(x)); }
 
     /// @brief Calls fn(j, x_j) for every particle j in the 27 cells around x (a superset of
     /// the particles within one cell size of x).
@@ -113,6 +115,20 @@ private:
     std::size_t m_count = 0;
     std::vector<Index> m_sorted_index;    ///< particle_count() + kPadding
     std::vector<Real> m_sx, m_sy, m_sz;   ///< particle_count() + kPadding each
+};
+
+/// @brief The candidates of one cell's 27-cell neighbourhood copied out of the grid into
+/// contiguous arrays (one per axis and the particle index, in the grid's slot order), padded
+/// with far points to a whole vector. Queries in one cell (mostly consecutive in a z-ordered
+/// set) then filter one contiguous array instead of 9 ranges each, and a query whose
+/// neighbourhood is empty (most fluid particles against the boundary) costs one comparison.
+struct CandidateCache {
+    std::int64_t cell = -1;  ///< the cell whose neighbourhood is held (-1: none)
+    std::size_t count = 0;   ///< candidates; the arrays hold count + UniformGrid::kPadding
+    std::vector<Real> x, y, z;
+    std::vector<Index> index;
+    /// @brief Holds the neighbourhood of `cell`, the cell of `at`.
+    void fill(const UniformGrid& grid, const Vec3& at, std::int64_t cell);
 };
 
 /// @brief Neighbour lists of query particles, in one of two layouts:

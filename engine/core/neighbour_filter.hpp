@@ -6,14 +6,12 @@
 
 namespace sph {
 
-class UniformGrid;
-struct CandidateRanges;
+struct CandidateCache;
 
-/// @brief Writes the particle indices j of the candidates in `ranges` (the 27 cells around xi,
-/// UniformGrid::candidate_ranges) with |xi - x_j|^2 < r2 and j != self to dst, in slot order,
-/// and returns their count.
-/// @warning dst must hold ranges.total plus one vector (16 indices) of slack.
-Index filter_candidates_simd(const UniformGrid& grid, const CandidateRanges& ranges, const Vec3& xi, Index self, Real r2,
-                             Index* dst);
+/// @brief Writes the particle indices j of the cached candidates (the 27 cells around xi, in
+/// the grid's slot order) with |xi - x_j|^2 < r2 and j != self to dst, in that order, and
+/// returns their count.
+/// @warning dst must hold cache.count plus one vector (16 indices) of slack.
+Index filter_candidates_simd(const CandidateCache& cache, const Vec3& xi, Index self, Real r2, Index* dst);
 
 }  // namespace sph

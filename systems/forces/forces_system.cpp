@@ -83,6 +83,12 @@ void ForcesSystem::run(Context& ctx) {
     const SteppingParams& stepping = m_stepping;
     // The mode and the gradient form are template parameters, so the `global`/`constant` loop
     // carries no per-neighbour branches for the individual-only sums or the correction.
+    // He Alg. 2 line 13, computed exactly as the global step of eq. 6-8 (so that equal steps
+    // reproduce `global`), from the particle's velocity and its new acceleration.
+    auto raw_step = [&](Index i) {
+        dt_raw[i] = global_time_step(stepping, h, c, std::sqrt(double(v[i].squaredNorm())),
+                                     std::sqrt(double(acc[i].squaredNorm())));
+    };
     auto evaluate = [&]<bool Individual, bool Corrected>(Index i) {
         const Vec3 xi = x[i], vi = v[i];
         const Real rhoi = rho[i];
@@ -118,9 +124,7 @@ void ForcesSystem::run(Context& ctx) {
         acc[i] = a + g;
         if constexpr (Individual) {
             drho[i] = div;
-            // He Alg. 2 line 13, computed exactly as the global step of eq. 6-8.
-            dt_raw[i] = global_time_step(stepping, h, c, std::sqrt(double(vi.squaredNorm())),
-                                         std::sqrt(double(acc[i].squaredNorm())));
+            raw_step(i);
         }
     };
     // The vectorised loop (simulation.simd) for the symmetric gradient; the scalar lambda
@@ -173,9 +177,8 @@ void ForcesSystem::run(Context& ctx) {
             if (simd) force_rows_simd(vec, active.data(), r.begin(), r.end());
             for (std::size_t k = r.begin(); k < r.end(); ++k) {
                 const Index i = active[k];
-                if (simd)  // He Alg. 2 line 13 on the vectorised loop's a_i
-                    dt_raw[i] = global_time_step(stepping, h, c, std::sqrt(double(v[i].squaredNorm())),
-                                                 std::sqrt(double(acc[i].squaredNorm())));
+                if (simd)  // the vectorised loop wrote a_i and drho_i/dt for the whole range
+                    raw_step(i);
                 else if (m_corrected)
                     evaluate.template operator()<true, true>(i);
                 else
