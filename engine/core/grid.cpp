@@ -1,5 +1,6 @@
 #include "engine/core/grid.hpp"
 
+#include "engine/core/errors.hpp"
 #include "engine/core/neighbour_filter.hpp"
 
 #include <tbb/enumerable_thread_specific.h>
@@ -8,18 +9,33 @@
 #include <tbb/parallel_sort.h>
 
 #include <atomic>
+#include <sstream>
+#include <string>
 #include <limits>
 #include <stdexcept>
 
 namespace sph {
 
-UniformGrid::UniformGrid(const Aabb& box, Real cell_size) : m_cell(cell_size), m_inv_cell(Real(1) / cell_size) {
+UniformGrid::UniformGrid(const Aabb& box, Real cell_size, const std::string& what)
+    : m_cell(cell_size), m_inv_cell(Real(1) / cell_size) {
+    double dims[3], total = 1;
     for (int a = 0; a < 3; ++a) {
         m_origin[a] = Real(box.min[a]) - cell_size;
-        const double cells = std::ceil((box.max[a] - box.min[a]) / cell_size) + 2.0;
-        m_dims[a] = std::max(1, static_cast<int>(cells));
+        dims[a] = std::max(1.0, std::ceil((box.max[a] - box.min[a]) / cell_size) + 2.0);
+        total *= dims[a];
     }
-    m_cell_start.assign(std::size_t(m_dims.prod()) + 1, 0);
+    // Cells are numbered with 32-bit indices (and the table holds one 32-bit start per cell),
+    // so a box too large for its cell size is refused before anything is allocated.
+    if (!(total < double(kMaxCells))) {
+        std::ostringstream os;
+        os << "the " << what << " over [" << box.min.transpose() << "] - [" << box.max.transpose() << "] m with cells of "
+           << cell_size << " m would have " << dims[0] << " x " << dims[1] << " x " << dims[2] << " = " << total
+           << " cells (" << total * sizeof(Index) / double(1 << 30) << " GiB for its cell table); at most " << kMaxCells
+           << " cells are supported: give the scene a smaller `domain`, or larger particles";
+        throw InputError(os.str());
+    }
+    for (int a = 0; a < 3; ++a) m_dims[a] = static_cast<int>(dims[a]);
+    m_cell_start.assign(std::size_t(total) + 1, 0);
 }
 
 std::size_t UniformGrid::bytes() const {

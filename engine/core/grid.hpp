@@ -6,6 +6,7 @@
 #include <array>
 #include <cstdint>
 #include <span>
+#include <string>
 
 #include <tbb/parallel_for.h>
 #include <vector>
@@ -28,8 +29,13 @@ class UniformGrid {
 public:
     UniformGrid() = default;
     /// @brief Grid covering `box` grown by one cell on every side; positions outside are
-    /// clamped into the border cells (the run stops on such particles anyway).
-    UniformGrid(const Aabb& box, Real cell_size);
+    /// clamped into the border cells (the run stops on such particles anyway). Throws
+    /// InputError, naming `what`, the box, the cell count and its memory, when the grid would
+    /// have kMaxCells cells or more.
+    UniformGrid(const Aabb& box, Real cell_size, const std::string& what = "grid");
+
+    /// Cells are indexed in 32 bits: at most this many (a 16 GiB cell table).
+    static constexpr std::uint64_t kMaxCells = (std::uint64_t(1) << 32) - 2;
 
     /// @brief Sorts particle indices by cell (a counting sort, so ties keep index order and the
     /// result is deterministic) and gathers their coordinates in that order, one array per axis

@@ -261,7 +261,7 @@ void write_fluid(World& w, const FluidSample& fluid) {
 void build_grids(World& w, const std::vector<Vec3d>& bx) {
     const Physics& ph = w.physics;
     auto& bs = w.boundary.store;
-    w.fluid_grid = UniformGrid(w.domain, ph.h);
+    w.fluid_grid = UniformGrid(w.domain, ph.h, "fluid grid (the scene's domain)");
     Aabb bbox = w.domain;
     for (const auto& p : bx) {
         bbox.min = bbox.min.cwiseMin(p);
@@ -271,7 +271,7 @@ void build_grids(World& w, const std::vector<Vec3d>& bx) {
         bbox.min = bbox.min.cwiseMin(body.bounds.min);
         bbox.max = bbox.max.cwiseMax(body.bounds.max);
     }
-    w.boundary_grid = UniformGrid(bbox, ph.h);
+    w.boundary_grid = UniformGrid(bbox, ph.h, "boundary grid (the domain and every boundary)");
     if (!bx.empty()) {
         // Static boundary particles never move: store them in z-order once, then index the
         // grid. Moving bodies keep their ranges (the permutation is the identity there); the

@@ -5,6 +5,7 @@
 #include <random>
 #include <set>
 
+#include "engine/core/errors.hpp"
 #include "engine/core/grid.hpp"
 
 using namespace sph;
@@ -181,6 +182,25 @@ TEST(NeighbourSearch, CompactListsPermuteRoundTripAndBecomeASlab) {
     build_neighbour_lists(grid, moved, h, true, QuerySubset{few, false}, lists, true);
     EXPECT_FALSE(lists.compact());
     expect_equal_to_brute(grid, moved, moved, h, true, lists, all);
+}
+
+// A box far too large for its cell size (the 171 x 40 x 40 m dam break of the robustness
+// issue: 2^31 cells and more) is refused with the cell count and the memory, before anything
+// is allocated; one just below the limit's order of magnitude is built.
+TEST(UniformGridLimits, TooManyCellsIsRefusedWithCountAndMemory) {
+    try {
+        UniformGrid grid(Aabb{Vec3d(0, 0, 0), Vec3d(171, 40, 40)}, 0.04f, "fluid grid");
+        FAIL() << "a grid of 4275 x 1000 x 1000 cells was built";
+    } catch (const InputError& e) {
+        const std::string m = e.what();
+        EXPECT_NE(m.find("fluid grid over [0 0 0] - [171  40  40] m"), std::string::npos) << m;
+        EXPECT_NE(m.find("4278 x 1003 x 1003 = 4.30371e+09 cells (16.0326 GiB"), std::string::npos) << m;
+        EXPECT_NE(m.find("GiB for its cell table"), std::string::npos) << m;
+        EXPECT_NE(m.find("at most 4294967294 cells"), std::string::npos) << m;
+    }
+    UniformGrid ok(Aabb{Vec3d(0, 0, 0), Vec3d(10, 4, 4)}, 0.04f);  // 2.7 M cells
+    EXPECT_EQ(ok.cell_count(), std::size_t(ok.dims().prod()));
+    EXPECT_GT(ok.cell_count(), 2'500'000u);
 }
 
 TEST(NeighbourSearch, ZOrderPermutationIsAPermutation) {
