@@ -89,6 +89,11 @@ Range non_negative(const char* unit) {
 Range any_number(const char* unit) {
     return {Range{}.lo, false, Range{}.hi, false, unit};
 }
+/// Times the clock holds: it counts whole picoseconds in 64 bits (engine/data/world.hpp), so
+/// 1 ns is 1,000 ticks (rounding below 0.1 %) and 1e6 s leaves room for t + dt up to 9.2e6 s.
+Range timeline_span() {
+    return {1e-9, true, 1e6, true, "seconds; the clock counts whole picoseconds in 64 bits"};
+}
 Range coefficient() {
     return {0.0, false, 1.0, true, nullptr};
 }
@@ -285,6 +290,14 @@ class Reader {
     void read_number(const Node& obj, const char* key, const Range& range, double& out) const {
         if (const json* v = obj.find(key)) out = number(obj.at(*v, key), range);
     }
+    /// A time the clock converts to ticks: positive, then within what the timeline holds.
+    void read_time(const Node& obj, const char* key, double& out) const {
+        const json* v = obj.find(key);
+        if (!v) return;
+        const Node node = obj.at(*v, key);
+        out = number(node, positive("seconds"));
+        if (!timeline_span().contains(out)) fail(node.path, dump(*v), timeline_span().describe());
+    }
 
     Vec3d vec3(const Node& n, const char* unit) const {
         const std::string what = std::string("an array of 3 numbers (") + unit + ")";
@@ -356,7 +369,7 @@ class Reader {
                           "(\"adaptive\" is the PCISPH mode: set simulation.method to \"pcisph\")",
                     {mode_path, child(n.path, "method")});
         }
-        read_number(n, "end_time", positive("seconds"), p.end_time);
+        read_time(n, "end_time", p.end_time);
         read_number(n, "frame_rate", non_negative("frames per simulated second; 0 writes none"),
                     p.frame_rate);
         read_number(n, "scale", {0.0, false, 1000.0, true, "particle-count multiplier"}, p.scale);
@@ -391,7 +404,7 @@ class Reader {
             p.lambda_f = 0.025;
             p.acoustic = false;
         }
-        read_number(n, "dt", positive("seconds"), p.dt);
+        read_time(n, "dt", p.dt);
         read_number(n, "lambda_v", coefficient(), p.lambda_v);
         read_number(n, "lambda_f", coefficient(), p.lambda_f);
         if (const json* v = n.find("acoustic")) {
@@ -399,8 +412,8 @@ class Reader {
             p.acoustic = v->get<bool>();
         }
         read_number(n, "lambda_c", coefficient(), p.lambda_c);
-        read_number(n, "dt_max", positive("seconds"), p.dt_max);
-        read_number(n, "dt_min", positive("seconds"), p.dt_min);
+        read_time(n, "dt_max", p.dt_max);
+        read_time(n, "dt_min", p.dt_min);
         if (const json* v = n.find("activation")) p.activation = pick_enum(n.at(*v, "activation"), k_activations);
         if (!(p.dt_min < p.dt_max)) {
             const std::string min_path = child(n.path, "dt_min");
