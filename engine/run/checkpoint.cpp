@@ -285,7 +285,8 @@ Checkpoint read_checkpoint(const std::filesystem::path& file) {
     ck.file = file;
     std::size_t pos = 0;
     auto take = [&](std::size_t n) {
-        if (pos + n > payload.size()) throw CheckpointError(name + ": a section runs past the end of the payload");
+        // n comes from the file: compare without pos + n, which a crafted length wraps round.
+        if (n > payload.size() - pos) throw CheckpointError(name + ": a section runs past the end of the payload");
         const std::string_view v = payload.substr(pos, n);
         pos += n;
         return v;

@@ -180,6 +180,23 @@ TEST(Checkpoint, DamagedFilesAreRefusedWithTheReason) {
               bad.string() + ": holds " + std::to_string(bytes.size() - 32 - 100) + " payload bytes, the header says " +
                   std::to_string(bytes.size() - 32) + " (truncated?)");
 
+    // A section length that wraps the read position round to the section's own start (2^64 minus
+    // its header's 12 + name bytes), under a valid checksum: the reader used to read that section
+    // for ever (the robustness issue, defect 4); now it names the overrun.
+    {
+        std::string wrapped = bytes;
+        std::uint32_t nlen = 0;
+        std::memcpy(&nlen, wrapped.data() + 32, 4);  // the first section's name length
+        const std::uint64_t huge = std::uint64_t(0) - (4 + nlen + 8);
+        std::memcpy(wrapped.data() + 32 + 4 + nlen, &huge, 8);  // its data length
+        std::uint64_t h = 14695981039346656037ull;  // FNV-1a 64 of the payload, as the writer does
+        for (std::size_t k = 32; k < wrapped.size(); ++k) h = (h ^ std::uint8_t(wrapped[k])) * 1099511628211ull;
+        std::memcpy(wrapped.data() + 24, &h, 8);
+        write_all(bad, wrapped);
+        EXPECT_EQ(checkpoint_error([&] { read_checkpoint(bad); }),
+                  bad.string() + ": a section runs past the end of the payload");
+    }
+
     write_all(bad, "{\"name\": \"a scene, not a checkpoint\"}");
     EXPECT_EQ(checkpoint_error([&] { read_checkpoint(bad); }),
               bad.string() + ": not an sph checkpoint (expected the magic \"SPHCKPT\" at the start)");
