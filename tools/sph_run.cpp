@@ -71,7 +71,7 @@ int main(int argc, char** argv) {
     std::string inject_nan, resume_file;
     double checkpoint_every = 0;
     app.add_option("scene", scene_file, "Scene file (JSON); not with --resume");
-    app.add_option("--mode", mode, "Stepping mode: constant | global | individual (wcsph); constant | adaptive (pcisph)");
+    app.add_option("--mode", mode, "Stepping mode: constant | global | individual | binned (wcsph); constant | adaptive (pcisph)");
     app.add_option("--end", end_time, "Simulated end time in seconds (overrides simulation.end_time)");
     app.add_option("--dt", dt, "Time step in seconds (constant mode; first step of global)");
     app.add_option("--scale", scale, "Particle-count multiplier (overrides simulation.scale)");

@@ -6,6 +6,7 @@ Access& Access::merge(const Access& other) {
     for (const auto& k : other.m_reads) add(m_reads, k);
     for (const auto& k : other.m_writes) add(m_writes, k);
     for (SetId s : other.m_resizes) resizes(s);
+    if (m_rows != other.m_rows) m_rows.clear();  // rows of one part only: any row may be written
     return *this;
 }
 

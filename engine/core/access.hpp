@@ -95,6 +95,16 @@ public:
         if (std::find(m_resizes.begin(), m_resizes.end(), set) == m_resizes.end()) m_resizes.push_back(set);
         return *this;
     }
+    /// @brief Declares that the system writes its particle columns only at the rows listed in
+    /// this index resource (the active set): the engine's finiteness check then reads those
+    /// rows only, so its cost follows the work.
+    template <class T>
+    Access& rows(const Resource<T>& r) {
+        m_rows = key_of(r);
+        return *this;
+    }
+    /// @brief The index resource named by rows(), or empty (every row may be written).
+    const std::string& written_rows() const { return m_rows; }
     /// @brief Adds everything another declaration holds (a loop's body towards its parent).
     Access& merge(const Access& other);
 
@@ -118,6 +128,7 @@ private:
     }
     std::vector<std::string> m_reads, m_writes;
     std::vector<SetId> m_resizes;
+    std::string m_rows;
 };
 
 }  // namespace sph

@@ -5,6 +5,7 @@
 namespace sph {
 
 void ComponentStore::permute(std::span<const Index> perm) {
+    ++m_layout;
     std::vector<ColumnBase*> cols;
     for (auto& [name, col] : m_columns) cols.push_back(col.get());
     tbb::parallel_for_each(cols.begin(), cols.end(), [&](ColumnBase* c) { c->permute(perm); });
@@ -33,6 +34,7 @@ void ComponentStore::restore(const Snapshot& in) {
         jobs.emplace_back(col.get(), it->second.get());
     }
     m_size = in.size;
+    ++m_layout;
     tbb::parallel_for_each(jobs.begin(), jobs.end(), [](const auto& j) { j.first->assign(*j.second); });
 }
 

@@ -119,8 +119,12 @@ public:
     /// @brief Resizes every column; new entries are value-initialised.
     void resize(std::size_t n) {
         m_size = n;
+        ++m_layout;
         for (auto& [name, col] : m_columns) col->resize(n);
     }
+    /// @brief Changes whenever rows are reordered, added, removed or restored (permute, resize,
+    /// restore): a system that keeps row indices across steps rebuilds them when it changes.
+    std::uint64_t layout() const { return m_layout; }
     /// @brief Applies one permutation to every registered column (new[i] = old[perm[i]]).
     /// Columns are independent, so they are permuted in parallel.
     void permute(std::span<const Index> perm);
@@ -168,6 +172,7 @@ private:
 
     std::map<std::string, std::unique_ptr<ColumnBase>, std::less<>> m_columns;
     std::size_t m_size = 0;
+    std::uint64_t m_layout = 0;
 };
 
 }  // namespace sph

@@ -29,6 +29,11 @@ inline constexpr Component<Vec3> position_last{"position_last"};
 inline constexpr Component<Vec3> velocity_last{"velocity_last"};
 inline constexpr Component<Real> density_last{"density_last"};
 
+// Binned stepping (engine/core/timeline.hpp): the particle's bin (a step of 2^bin quanta) and
+// the time its step ends, in quanta. `dt` holds the bin's step in seconds for the outputs.
+inline constexpr Component<std::uint8_t> bin{"bin"};
+inline constexpr Component<std::uint64_t> ti_end{"ti_end"};
+
 // WCSPH with `fluid.pressure_gradient: corrected` (Bonet & Lok 1999): L_i, the inverse of the
 // kernel-gradient moment matrix M_i = -sum_j V_j grad W_ij (x_ij)^T, eigenvalues clamped.
 inline constexpr Component<Mat3> gradient_correction{"gradient_correction"};

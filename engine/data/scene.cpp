@@ -92,6 +92,8 @@ const char* to_string(SteppingMode m) {
             return "individual";
         case SteppingMode::Adaptive:
             return "adaptive";
+        case SteppingMode::Binned:
+            return "binned";
     }
     return "unknown";
 }

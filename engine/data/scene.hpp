@@ -19,9 +19,11 @@
 namespace sph {
 
 enum class Method { Wcsph, Pcisph };
-/// `constant` for both methods; `global` and `individual` are WCSPH modes; `adaptive` is the
-/// PCISPH mode of Ihmsen et al. 2010 (eq. 16-27).
-enum class SteppingMode { Constant, Global, Individual, Adaptive };
+/// `constant` for both methods; `global`, `individual` and `binned` are WCSPH modes; `adaptive`
+/// is the PCISPH mode of Ihmsen et al. 2010 (eq. 16-27). `binned` is per-particle stepping on
+/// power-of-two bins with a neighbour limiter and wake-up (engine/core/timeline.hpp,
+/// systems/timestep/binned_step_system.hpp); `individual` is He et al.'s Alg. 2 as published.
+enum class SteppingMode { Constant, Global, Individual, Adaptive, Binned };
 /// PCISPH iteration rule: `fixed` runs exactly `iterations` (Ihmsen 2010: three);
 /// `until_converged` is Solenthaler & Pajarola's loop: while max rho_err > eta or k < iterations,
 /// at most `max_iterations`.

@@ -55,8 +55,9 @@ inline constexpr const char* k_name_expected =
     "a non-empty string without \"/\" (it names the output folder)";
 
 inline constexpr std::array<Method, 2> k_methods{Method::Wcsph, Method::Pcisph};
-inline constexpr std::array<SteppingMode, 4> k_modes{SteppingMode::Constant, SteppingMode::Global,
-                                              SteppingMode::Individual, SteppingMode::Adaptive};
+inline constexpr std::array<SteppingMode, 5> k_modes{SteppingMode::Constant, SteppingMode::Global,
+                                              SteppingMode::Individual, SteppingMode::Binned,
+                                              SteppingMode::Adaptive};
 inline constexpr std::array<PcisphLoop, 2> k_loops{PcisphLoop::Fixed, PcisphLoop::UntilConverged};
 inline constexpr std::array<BoundaryHandling, 2> k_handlings{BoundaryHandling::Ihmsen,
                                                       BoundaryHandling::DirectForcing};

@@ -363,9 +363,9 @@ class Reader {
             const std::string mode_path = child(child(n.path, "stepping"), "mode");
             fail_at(mode_path, dump_at(mode_path),
                     p.method == Method::Pcisph
-                        ? "one of \"constant\", \"adaptive\" for method \"pcisph\" (\"global\" and "
-                          "\"individual\" are WCSPH modes)"
-                        : "one of \"constant\", \"global\", \"individual\" for method \"wcsph\" "
+                        ? "one of \"constant\", \"adaptive\" for method \"pcisph\" (\"global\", "
+                          "\"individual\" and \"binned\" are WCSPH modes)"
+                        : "one of \"constant\", \"global\", \"individual\", \"binned\" for method \"wcsph\" "
                           "(\"adaptive\" is the PCISPH mode: set simulation.method to \"pcisph\")",
                     {mode_path, child(n.path, "method")});
         }

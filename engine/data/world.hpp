@@ -158,6 +158,9 @@ struct World {
     /// active particles (ascending), both rebuilt each step.
     std::vector<Index> active_set;
     std::vector<Index> halo_set;
+    /// Binned stepping: the particles the collision net moved this step (ascending); their
+    /// steps are cut to end at the next due time (BinnedWakeSystem).
+    std::vector<Index> collided;
     /// Boundaries with a motion (empty when every boundary is static), in scene order.
     std::vector<MovingBody> moving_bodies;
     /// Boundary particles [0, static_boundary_end) never move (z-ordered once).
@@ -191,6 +194,7 @@ inline constexpr Resource<StepStats> stats{"step.stats", &World::stats};
 inline constexpr Resource<Rollback> rollback{"step.rollback", &World::rollback};
 inline constexpr Resource<std::vector<Index>> active_set{"fluid.active_set", &World::active_set};
 inline constexpr Resource<std::vector<Index>> halo_set{"fluid.halo_set", &World::halo_set};
+inline constexpr Resource<std::vector<Index>> collided{"fluid.collided", &World::collided};
 inline constexpr Resource<std::vector<MovingBody>> moving_bodies{"boundary.moving_bodies", &World::moving_bodies};
 }  // namespace res
 
@@ -206,6 +210,8 @@ inline constexpr Counter boundary_contributions{"boundary_contributions"};  ///<
 inline constexpr Counter propagation_updates{"propagation_updates"};  ///< Delta t_i recomputed
 inline constexpr Counter iterations{"iterations"};            ///< solver passes
 inline constexpr Counter boundary_active{"boundary_active"};  ///< active boundary particles
+inline constexpr Counter woken{"woken"};                      ///< sleeping particles whose step the limiter cut
+inline constexpr Counter limiter_passes{"limiter_passes"};    ///< passes of the limiter to its fixed point
 }  // namespace counter
 
 }  // namespace sph

@@ -76,6 +76,9 @@ public:
     /// @brief Particles in a set. Stable while the step runs except for a system that resizes
     /// the set, which the graph orders against every other user of it.
     std::size_t size(SetId set) const { return m_world.store(set).size(); }
+    /// @brief The set's row layout generation (ComponentStore::layout): a system that keeps row
+    /// indices from one step to the next rebuilds them when it changes.
+    std::uint64_t layout(SetId set) const { return m_world.store(set).layout(); }
     /// @brief Whether a column is allocated (optional columns of a set).
     bool has(SetId set, std::string_view component) const { return m_world.store(set).has(component); }
 

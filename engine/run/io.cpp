@@ -240,9 +240,11 @@ std::vector<std::string> frame_attributes(const World& world) {
     const OutputParams& o = world.scene.output;
     std::vector<std::string> a = o.attributes;
     if (!o.attributes_explicit) {
-        // Default list: individual stepping also shows each particle's step and activity.
+        // Default list: per-particle stepping also shows each particle's step and activity
+        // (and, binned, its bin).
         if (world.fluid.store.has(comp::dt.name)) a.emplace_back("dt");
         if (world.fluid.store.has(comp::active.name)) a.emplace_back("active");
+        if (world.fluid.store.has(comp::bin.name)) a.emplace_back("bin");
     }
     return a;
 }

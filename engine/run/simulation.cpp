@@ -30,23 +30,26 @@ Simulation::Simulation(const Scene& scene, Recipe recipe) {
 
 namespace {
 
-/// Index of the first non-finite element of a column, or n.
+/// Index of the first non-finite element of a column, or n; only the listed rows when `rows`
+/// is given (ascending, so the first found is still the lowest index).
 template <class T>
-std::size_t first_non_finite(std::span<const T> v) {
-    const std::size_t n = v.size();
-    return tbb::parallel_reduce(
-        tbb::blocked_range<std::size_t>(0, n, 8192), n,
+std::size_t first_non_finite(std::span<const T> v, const std::vector<Index>* rows) {
+    const std::size_t n = v.size(), m = rows ? rows->size() : n;
+    const std::size_t k = tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, m, 8192), m,
         [&](const auto& r, std::size_t best) {
-            for (std::size_t i = r.begin(); i < r.end() && i < best; ++i) {
+            for (std::size_t k = r.begin(); k < r.end() && k < best; ++k) {
+                const std::size_t i = rows ? (*rows)[k] : k;
                 if constexpr (std::is_same_v<T, Vec3>) {
-                    if (!v[i].allFinite()) return i;
+                    if (!v[i].allFinite()) return k;
                 } else {
-                    if (!std::isfinite(v[i])) return i;
+                    if (!std::isfinite(v[i])) return k;
                 }
             }
             return best;
         },
         [](std::size_t a, std::size_t b) { return std::min(a, b); });
+    return k == m ? n : (rows ? (*rows)[k] : k);
 }
 
 }  // namespace
@@ -55,18 +58,22 @@ void Simulation::trace_non_finite(std::size_t system) {
     // Cheap (a streaming read of the columns just written, ~1 % of a step) and it is what lets
     // a NaN be reported with the system that produced it rather than the one that carried it.
     const ComponentStore& store = m_world.fluid.store;
-    for (const auto& wr : m_graph->access(system).writes()) {
+    const Access& access = m_graph->access(system);
+    // A system that declares its rows (Access::rows) is checked there only.
+    const std::vector<Index>* rows = nullptr;
+    if (access.written_rows() == key_of(res::active_set)) rows = &m_world.active_set;
+    for (const auto& wr : access.writes()) {
         if (wr.rfind("fluid.", 0) != 0) continue;
         const std::string col = wr.substr(6);
         if (!store.has(col)) continue;
         const std::type_info& t = store.type_of(col);
         std::size_t bad = store.size();
         if (t == typeid(Vec3))
-            bad = first_non_finite(store.get(Component<Vec3>{col}));
+            bad = first_non_finite(store.get(Component<Vec3>{col}), rows);
         else if (t == typeid(Real))
-            bad = first_non_finite(store.get(Component<Real>{col}));
+            bad = first_non_finite(store.get(Component<Real>{col}), rows);
         else if (t == typeid(double))
-            bad = first_non_finite(store.get(Component<double>{col}));
+            bad = first_non_finite(store.get(Component<double>{col}), rows);
         if (bad == store.size()) continue;
         std::lock_guard lock(m_trace_mutex);
         // Recipe order is a topological order of the graph: a value can only reach a later

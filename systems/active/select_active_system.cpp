@@ -11,6 +11,19 @@
 
 namespace sph {
 
+bool near_moving_body(const std::vector<MovingBody>& bodies, const Vec3& x, double dt, Real h) {
+    // Our rule, not in He et al.: a particle is active while it lies within h + speed * Delta t_i
+    // of a moving body's bounding box, i.e. wherever the body could come within the kernel's
+    // reach before the particle's next evaluation. It therefore never skips a contact, and the
+    // body's velocity enters its forces at every step of the contact.
+    for (const MovingBody& b : bodies) {
+        const Real reach = h + Real(b.speed * dt);
+        const Vec3 lo = b.bounds.min.cast<Real>().array() - reach, hi = b.bounds.max.cast<Real>().array() + reach;
+        if ((x.array() >= lo.array()).all() && (x.array() <= hi.array()).all()) return true;
+    }
+    return false;
+}
+
 Access SelectActiveSystem::access() const {
     return Access()
         .read(fluid(comp::t_last), fluid(comp::dt), fluid(comp::position), res::moving_bodies, res::dt)
@@ -41,24 +54,13 @@ void SelectActiveSystem::run(Context& ctx) {
     const std::size_t n = t_last.size();
     const Real h = ctx.physics().h;
     const auto& bodies = ctx.read(res::moving_bodies);
-    // Moving boundaries (our rule, not in He et al.): a particle is active while it lies within
-    // h + speed * Delta t_i of a moving body's bounding box, i.e. wherever the body could come
-    // within the kernel's reach before the particle's next evaluation. It therefore never
-    // skips a contact, and the body's velocity enters its forces at every step of the contact.
-    auto near_moving_body = [&](std::size_t i) {
-        for (const MovingBody& b : bodies) {
-            const Real reach = h + Real(b.speed * dt[i]);
-            const Vec3 lo = b.bounds.min.cast<Real>().array() - reach, hi = b.bounds.max.cast<Real>().array() + reach;
-            if ((x[i].array() >= lo.array()).all() && (x[i].array() <= hi.array()).all()) return true;
-        }
-        return false;
-    };
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const auto& r) {
         for (std::size_t i = r.begin(); i < r.end(); ++i) {
             // He Alg. 2 line 2. `paper`: deadline <= now, the tie counted as active (the paper
             // writes "<"; with "<" a particle whose Delta t_i equals Delta t_sim would wait two
             // steps). `deadline`: deadline < now + ahead.
-            active[i] = (t_last[i] + to_ticks(dt[i]) < now + ahead) || wake[i] || (!bodies.empty() && near_moving_body(i));
+            active[i] = (t_last[i] + to_ticks(dt[i]) < now + ahead) || wake[i] ||
+                        (!bodies.empty() && near_moving_body(bodies, x[i], dt[i], h));
             wake[i] = 0;
         }
     });

@@ -16,10 +16,16 @@
 #include <cstdint>
 #include <vector>
 
+#include "engine/core/types.hpp"
 #include "engine/data/scene.hpp"
 #include "engine/graph/system.hpp"
 
 namespace sph {
+
+struct MovingBody;
+/// @brief Whether a particle at x whose step is dt seconds lies within h + speed dt of a moving
+/// body's bounding box (where the body could reach its kernel before its next evaluation).
+bool near_moving_body(const std::vector<MovingBody>& bodies, const Vec3& x, double dt, Real h);
 
 class SelectActiveSystem final : public System {
 public:

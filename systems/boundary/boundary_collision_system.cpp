@@ -5,7 +5,10 @@
 #include "systems/boundary/boundary_collision_system.hpp"
 
 #include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_reduce.h>
+
+#include <algorithm>
 
 #include <vector>
 
@@ -17,9 +20,13 @@
 namespace sph {
 
 Access BoundaryCollisionSystem::access() const {
-    return Access()
+    Access a = Access()
         .write(fluid(comp::position), fluid(comp::velocity), fluid(comp::wake), counter::collisions)
+        .write_if(m_active_rows, res::collided)
+        .read_if(m_active_rows, res::active_set)
         .read_if(m_moving, res::dt);  // the body's position at the step's end
+    if (m_active_rows) a.rows(res::active_set);
+    return a;
 }
 
 namespace {
@@ -130,10 +137,13 @@ void BoundaryCollisionSystem::run(Context& ctx) {
     }
     const std::span<std::uint8_t> wake =
         ctx.has(SetId::Fluid, comp::wake.name) ? ctx.write(fluid(comp::wake)) : std::span<std::uint8_t>{};
+    tbb::enumerable_thread_specific<std::vector<Index>> hits;
+    const std::vector<Index>* rows = m_active_rows ? &ctx.read(res::active_set) : nullptr;
     ctx.write(counter::collisions) = tbb::parallel_reduce(
-        tbb::blocked_range<std::size_t>(0, x.size(), 4096), std::uint64_t(0),
+        tbb::blocked_range<std::size_t>(0, rows ? rows->size() : x.size(), 4096), std::uint64_t(0),
         [&](const auto& r, std::uint64_t count) {
-            for (std::size_t i = r.begin(); i < r.end(); ++i) {
+            for (std::size_t k = r.begin(); k < r.end(); ++k) {
+                const std::size_t i = rows ? (*rows)[k] : k;
                 bool hit = false;
                 if (!any_moving) {
                     for (const auto& b : boundaries) hit |= collide(b, x[i], v[i]);
@@ -151,11 +161,19 @@ void BoundaryCollisionSystem::run(Context& ctx) {
                 // Individual stepping: the corrected state must become the particle's base
                 // state, so it is evaluated at the next step (SelectActiveSystem reads wake).
                 if (hit && !wake.empty()) wake[i] = 1;
+                // Binned stepping: the same, through the list BinnedWakeSystem reads.
+                if (hit && m_active_rows) hits.local().push_back(Index(i));
                 count += hit;
             }
             return count;
         },
         std::plus<>());
+    if (m_active_rows) {
+        auto& out = ctx.write(res::collided);
+        out.clear();
+        for (const auto& v : hits) out.insert(out.end(), v.begin(), v.end());
+        std::sort(out.begin(), out.end());
+    }
 }
 
 }  // namespace sph

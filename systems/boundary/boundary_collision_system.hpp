@@ -22,8 +22,12 @@ namespace sph {
 class BoundaryCollisionSystem final : public System {
 public:
     /// @param boundaries the scene's boundaries (the surfaces to hold the fluid behind).
-    explicit BoundaryCollisionSystem(std::vector<BoundaryDesc> boundaries, bool moving = false)
-        : m_boundaries(std::move(boundaries)), m_moving(moving) {}
+    /// @param active_rows binned stepping: net the active rows only (the particles evaluated
+    /// this step; a sleeping one moves at most lambda_v h between its evaluations, so it is
+    /// netted at the end of its next one) and list the corrected ones in res::collided.
+    explicit BoundaryCollisionSystem(std::vector<BoundaryDesc> boundaries, bool moving = false,
+                                     bool active_rows = false)
+        : m_boundaries(std::move(boundaries)), m_moving(moving), m_active_rows(active_rows) {}
     std::string name() const override { return "boundary_collision"; }
     Access access() const override;
     void run(Context& ctx) override;
@@ -31,6 +35,7 @@ public:
 private:
     std::vector<BoundaryDesc> m_boundaries;
     bool m_moving;
+    bool m_active_rows;
 };
 
 }  // namespace sph

@@ -17,12 +17,14 @@
 namespace sph {
 
 Access DensitySystem::access() const {
-    return Access()
-        .read(fluid(comp::position), res::fluid_neighbours)
-        .write(fluid(comp::density), fluid(comp::pressure))
-        .read_if(m_with_boundary, res::boundary_neighbours, boundary(comp::position), boundary(comp::volume))
-        .read_if(m_individual, res::active_set)
-        .write_if(m_individual, fluid(comp::density_last));
+    Access a = Access()
+                   .read(fluid(comp::position), res::fluid_neighbours)
+                   .write(fluid(comp::density), fluid(comp::pressure))
+                   .read_if(m_with_boundary, res::boundary_neighbours, boundary(comp::position), boundary(comp::volume))
+                   .read_if(m_individual, res::active_set)
+                   .write_if(m_individual, fluid(comp::density_last));
+    if (m_individual) a.rows(res::active_set);  // He Alg. 2 lines 6-7: the active rows only
+    return a;
 }
 
 void DensitySystem::register_components(World& w) {

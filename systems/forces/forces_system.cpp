@@ -30,15 +30,17 @@
 namespace sph {
 
 Access ForcesSystem::access() const {
-    return Access()
-        .read(fluid(comp::position), fluid(comp::velocity), fluid(comp::density), fluid(comp::pressure),
-              res::fluid_neighbours)
-        .write(fluid(comp::acceleration), counter::force_evaluations)
-        .read_if(m_with_boundary, res::boundary_neighbours, boundary(comp::position), boundary(comp::volume))
-        .read_if(m_with_boundary && m_moving_boundary, boundary(comp::velocity))
-        .read_if(m_corrected, fluid(comp::gradient_correction))
-        .read_if(m_individual, res::active_set)
-        .write_if(m_individual, fluid(comp::drho_dt), fluid(comp::dt_raw), fluid(comp::t_last));
+    Access a = Access()
+                   .read(fluid(comp::position), fluid(comp::velocity), fluid(comp::density), fluid(comp::pressure),
+                         res::fluid_neighbours)
+                   .write(fluid(comp::acceleration), counter::force_evaluations)
+                   .read_if(m_with_boundary, res::boundary_neighbours, boundary(comp::position), boundary(comp::volume))
+                   .read_if(m_with_boundary && m_moving_boundary, boundary(comp::velocity))
+                   .read_if(m_corrected, fluid(comp::gradient_correction))
+                   .read_if(m_individual, res::active_set)
+                   .write_if(m_individual, fluid(comp::drho_dt), fluid(comp::dt_raw), fluid(comp::t_last));
+    if (m_individual) a.rows(res::active_set);  // He Alg. 2 lines 10-14: the active rows only
+    return a;
 }
 
 void ForcesSystem::register_components(World& w) {

@@ -1,5 +1,6 @@
 #include "systems/methods/wcsph.hpp"
 
+#include "systems/active/binned_select_system.hpp"
 #include "systems/active/halo_system.hpp"
 #include "systems/active/select_active_system.hpp"
 #include "systems/boundary/boundary_collision_system.hpp"
@@ -16,6 +17,8 @@
 #include "systems/neighbours/fluid_neighbours_system.hpp"
 #include "systems/timestep/dt_propagation_system.hpp"
 #include "systems/timestep/individual_dt_system.hpp"
+#include "systems/timestep/binned_step_system.hpp"
+#include "systems/timestep/binned_wake_system.hpp"
 #include "systems/timestep/constant_dt_system.hpp"
 #include "systems/timestep/global_dt_system.hpp"
 
@@ -25,25 +28,36 @@ Recipe make_wcsph_recipe(const Scene& scene) {
     Recipe r;
     const bool boundary = !scene.boundaries.empty();
     const SteppingMode mode = scene.simulation.stepping.mode;
-    const bool individual = mode == SteppingMode::Individual;
+    const bool binned = mode == SteppingMode::Binned;
+    // Both per-particle modes evaluate only their active set (the `individual` flag of the
+    // neighbour, density and force systems); they differ in selection, step rule and stats.
+    const bool individual = mode == SteppingMode::Individual || binned;
     const bool moving = has_moving_boundaries(scene);
     if (boundary) r.setup.push_back(std::make_unique<BoundaryVolumeSystem>());
     // Kinematic boundaries are placed at the step's time before anything reads them.
     if (moving) r.step.push_back(std::make_unique<BoundaryMotionSystem>(scene.boundaries));
-    // He et al. Alg. 2 (individual) or Alg. 1 with eq. 6-8 (global) / a fixed step (constant).
+    // He et al. Alg. 2 (individual) or Alg. 1 with eq. 6-8 (global) / a fixed step (constant);
+    // binned: power-of-two bins with a neighbour limiter (systems/timestep/binned_step_system.hpp).
     const SteppingParams& stepping = scene.simulation.stepping;
     if (mode == SteppingMode::Constant) r.step.push_back(std::make_unique<ConstantDtSystem>(stepping.dt));
-    if (individual) r.step.push_back(std::make_unique<SelectActiveSystem>(stepping.activation));
+    if (mode == SteppingMode::Individual)
+        r.step.push_back(std::make_unique<SelectActiveSystem>(stepping.activation));
+    if (binned) r.step.push_back(std::make_unique<BinnedSelectSystem>(stepping.dt_min, stepping.dt_max));
     r.step.push_back(std::make_unique<FluidGridSystem>());
     r.step.push_back(std::make_unique<FluidNeighbourSystem>(individual));
     if (boundary) r.step.push_back(std::make_unique<BoundaryNeighbourSystem>(individual));
-    if (individual) r.step.push_back(std::make_unique<HaloSystem>(boundary));
+    if (mode == SteppingMode::Individual) r.step.push_back(std::make_unique<HaloSystem>(boundary));
     r.step.push_back(std::make_unique<DensitySystem>(boundary, individual));
     const bool corrected = scene.fluid.pressure_gradient == PressureGradient::Corrected;
     if (corrected) r.step.push_back(std::make_unique<GradientCorrectionSystem>(boundary, individual));
     r.step.push_back(std::make_unique<ForcesSystem>(boundary, individual, moving, corrected, stepping));
-    r.step.push_back(std::make_unique<StepStatsSystem>(individual));
-    if (individual) {
+    r.step.push_back(std::make_unique<StepStatsSystem>(
+        individual, binned ? StepStatsSystem::Rows::Active : StepStatsSystem::Rows::All));
+    if (binned) {
+        // Limiter, wake-up and the next due time, then He Alg. 2 lines 18-21 for every row.
+        r.step.push_back(std::make_unique<BinnedStepSystem>());
+        r.step.push_back(std::make_unique<AsyncIntegrationSystem>());
+    } else if (individual) {
         r.step.push_back(std::make_unique<DtPropagationSystem>());
         r.step.push_back(std::make_unique<IndividualGlobalDtSystem>(stepping.activation, stepping.dt_max));
         r.step.push_back(std::make_unique<AsyncIntegrationSystem>());
@@ -51,7 +65,8 @@ Recipe make_wcsph_recipe(const Scene& scene) {
         if (mode == SteppingMode::Global) r.step.push_back(std::make_unique<GlobalDtSystem>(stepping));
         r.step.push_back(std::make_unique<SymplecticEulerSystem>());
     }
-    if (boundary) r.step.push_back(std::make_unique<BoundaryCollisionSystem>(scene.boundaries, moving));
+    if (boundary) r.step.push_back(std::make_unique<BoundaryCollisionSystem>(scene.boundaries, moving, binned));
+    if (boundary && binned) r.step.push_back(std::make_unique<BinnedWakeSystem>());
     return r;
 }
 

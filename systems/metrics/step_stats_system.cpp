@@ -31,20 +31,22 @@ void StepStatsSystem::run(Context& ctx) {
     const auto a = ctx.read(fluid(comp::acceleration));
     const double rho0 = ctx.physics().rest_density;
     const auto& counts = ctx.read(res::fluid_neighbours).count;
-    const std::size_t n = rho.size();
     // Individual stepping: neighbour pairs and the updated count are those of the active set.
     const std::uint8_t* is_active = m_individual ? ctx.read(fluid(comp::active)).data() : nullptr;
+    const std::vector<Index>* rows = m_rows == Rows::Active ? &ctx.read(res::active_set) : nullptr;
+    const std::size_t n = rows ? rows->size() : rho.size();
     // Deterministic reduction: the same sums whatever the thread count.
     const Acc r = tbb::parallel_deterministic_reduce(
         tbb::blocked_range<std::size_t>(0, n, 1024), Acc{},
         [&](const auto& range, Acc acc) {
-            for (std::size_t i = range.begin(); i < range.end(); ++i) {
+            for (std::size_t k = range.begin(); k < range.end(); ++k) {
+                const std::size_t i = rows ? (*rows)[k] : k;
                 const double e = std::max(0.0, double(rho[i]) / rho0 - 1.0);
                 acc.err_sum += e;
                 acc.err_max = std::max(acc.err_max, e);
                 acc.v2_max = std::max(acc.v2_max, double(v[i].squaredNorm()));
                 const double a2 = a[i].squaredNorm();
-                if (a2 > acc.a2_max || (a2 == acc.a2_max && i < acc.a_arg)) {
+                if (a2 > acc.a2_max || (a2 == acc.a2_max && Index(i) < acc.a_arg)) {
                     acc.a2_max = a2;
                     acc.a_arg = Index(i);
                 }

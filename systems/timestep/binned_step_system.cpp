@@ -1,0 +1,206 @@
+// Binned stepping: raw bins, the <= 4x neighbour limiter (Saitoh & Makino 2009), wake-up, and
+// the next due time (binned_step_system.hpp states the rules).
+#include "systems/timestep/binned_step_system.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
+#include <algorithm>
+#include <atomic>
+#include <limits>
+
+#include "engine/data/components.hpp"
+#include "engine/data/world.hpp"
+#include "engine/graph/context.hpp"
+#include "systems/timestep/binned_state.hpp"
+
+namespace sph {
+
+Access BinnedStepSystem::access() const {
+    return Access()
+        .read(res::active_set, res::fluid_neighbours, fluid(comp::dt_raw), fluid(comp::active))
+        .write(fluid(comp::bin), fluid(comp::ti_end), fluid(comp::dt), res::bin_timeline, res::due_buckets,
+               res::dt, counter::woken, counter::limiter_passes);
+}
+
+void BinnedStepSystem::register_components(World& w) {
+    w.fluid.store.add(comp::bin);
+    w.fluid.store.add(comp::ti_end);
+    w.fluid.store.add(comp::dt);
+    w.fluid.store.add(comp::dt_raw);
+}
+
+namespace {
+
+/// Rows per task: a few thousand integer gathers, so small active sets run in one task.
+constexpr std::size_t kGrain = 2048;
+
+/// Lowers an 8-bit value to at most `v`; true when it changed.
+bool atomic_lower(std::uint8_t& target, std::uint8_t v) {
+    std::atomic_ref<std::uint8_t> a(target);
+    std::uint8_t cur = a.load(std::memory_order_relaxed);
+    while (v < cur)
+        if (a.compare_exchange_weak(cur, v, std::memory_order_relaxed)) return true;
+    return false;
+}
+
+}  // namespace
+
+void BinnedStepSystem::run(Context& ctx) {
+    const auto& set = ctx.read(res::active_set);
+    const NeighbourLists& lists = ctx.read(res::fluid_neighbours);
+    const auto dt_raw = ctx.read(fluid(comp::dt_raw));
+    const auto active = ctx.read(fluid(comp::active));
+    auto bin = ctx.write(fluid(comp::bin));
+    auto ti_end = ctx.write(fluid(comp::ti_end));
+    auto dt = ctx.write(fluid(comp::dt));
+    BinTimeline& tl = ctx.write(res::bin_timeline);
+    DueBuckets& buckets = ctx.write(res::due_buckets);
+    StepSize& s = ctx.write(res::dt);
+    const std::uint64_t now = tl.now;
+    std::uint64_t woken_count = 0, passes = 0;
+    if (!set.empty()) {
+        // 1. Raw bins, with the growth rule (at t = 0 every bin is aligned and any is allowed).
+        const int raw_lo = tbb::parallel_reduce(
+            tbb::blocked_range<std::size_t>(0, set.size(), kGrain), tl.max_bin,
+            [&](const auto& r, int lo) {
+                for (std::size_t k = r.begin(); k < r.end(); ++k) {
+                    const Index i = set[k];
+                    int b = tl.bin_for(dt_raw[i]);
+                    if (now > 0) {
+                        const int old = bin[i];
+                        if (b > old) b = BinTimeline::aligned(now, old + 1) ? old + 1 : old;
+                    }
+                    bin[i] = std::uint8_t(b);
+                    lo = std::min(lo, b);
+                }
+                return lo;
+            },
+            [](int a, int b) { return std::min(a, b); });
+        buckets.bin_lo = std::min(buckets.bin_lo, raw_lo);
+        // Rows that can break the rule: the limiter visits bin_i > lo + 2 (every bin is >= lo);
+        // the wake-up visits bin_i + 2 < hi (every bin is <= hi) and every row the limiter may
+        // lower. The order of either list does not change the result.
+        const int lo = buckets.bin_lo, hi = buckets.bin_hi;
+        tbb::enumerable_thread_specific<std::vector<Index>> limit_rows, wake_rows;
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, set.size(), kGrain), [&](const auto& r) {
+            auto& lim = limit_rows.local();
+            auto& wak = wake_rows.local();
+            for (std::size_t k = r.begin(); k < r.end(); ++k) {
+                const Index i = set[k];
+                const bool limited = bin[i] > lo + 2;
+                if (limited) lim.push_back(i);
+                if (limited || bin[i] + 2 < hi) wak.push_back(i);
+            }
+        });
+        m_limit.clear();
+        m_wake.clear();
+        for (auto& v : limit_rows) m_limit.insert(m_limit.end(), v.begin(), v.end());
+        for (auto& v : wake_rows) m_wake.insert(m_wake.end(), v.begin(), v.end());
+        tbb::enumerable_thread_specific<std::vector<Index>> woken;
+        // The limiter to its fixed point; true when it lowered a bin.
+        auto limit = [&] {
+            bool any_change = false;
+            while (!m_limit.empty()) {
+                ++passes;
+                const bool changed = tbb::parallel_reduce(
+                    tbb::blocked_range<std::size_t>(0, m_limit.size(), kGrain), false,
+                    [&](const auto& r, bool any) {
+                        for (std::size_t k = r.begin(); k < r.end(); ++k) {
+                            const Index i = m_limit[k];
+                            int lo = std::atomic_ref<std::uint8_t>(bin[i]).load(std::memory_order_relaxed);
+                            for (Index j : lists.of(i))
+                                lo = std::min<int>(lo, std::atomic_ref<std::uint8_t>(bin[j]).load(std::memory_order_relaxed) + 2);
+                            any |= atomic_lower(bin[i], std::uint8_t(lo));
+                        }
+                        return any;
+                    },
+                    [](bool a, bool b) { return a || b; });
+                if (!changed) break;
+                any_change = true;
+            }
+            return any_change;
+        };
+        // One wake-up pass; true when it lowered a sleeping bin.
+        auto wake = [&] {
+            return !m_wake.empty() && tbb::parallel_reduce(
+                tbb::blocked_range<std::size_t>(0, m_wake.size(), kGrain), false,
+                [&](const auto& r, bool any) {
+                    auto& out = woken.local();
+                    for (std::size_t k = r.begin(); k < r.end(); ++k) {
+                        const Index i = m_wake[k];
+                        const int cap = bin[i] + 2;
+                        for (Index j : lists.of(i))
+                            // An active j never exceeds cap (the limiter's fixed point), so
+                            // the activity flag is read only for the rare candidates.
+                            if (bin[j] > cap && !active[j] && atomic_lower(bin[j], std::uint8_t(cap))) {
+                                out.push_back(j);
+                                any = true;
+                            }
+                    }
+                    return any;
+                },
+                [](bool a, bool b) { return a || b; });
+        };
+        // Wake-up leaves the active bins as they are, so after it only a limiter pass that
+        // changes an active bin (bounded by a newly lowered sleeping one) calls for another.
+        limit();
+        while (wake() && limit()) {
+        }
+        // 4. New ends. Active particles: a whole step of their bin from now, filed by bin (at
+        // most max_bin + 1 buckets touched, each appended once, in ascending row order). Woken
+        // ones: the first multiple of their new bin's step after now (never after their old end).
+        for (auto& v : m_by_bin) v.clear();
+        int final_hi = 0;
+        for (Index i : set) {
+            final_hi = std::max<int>(final_hi, bin[i]);
+            ti_end[i] = now + BinTimeline::length(bin[i]);
+            dt[i] = tl.seconds(BinTimeline::length(bin[i]));
+            m_by_bin[bin[i]].push_back(i);
+        }
+        buckets.bin_hi = std::max(buckets.bin_hi, final_hi);
+        for (std::size_t b = 0; b < m_by_bin.size(); ++b) {
+            if (m_by_bin[b].empty()) continue;
+            auto& v = buckets.due[now + BinTimeline::length(int(b))];
+            v.insert(v.end(), m_by_bin[b].begin(), m_by_bin[b].end());
+        }
+        std::vector<Index> cut;
+        for (auto& v : woken) cut.insert(cut.end(), v.begin(), v.end());
+        std::sort(cut.begin(), cut.end());
+        cut.erase(std::unique(cut.begin(), cut.end()), cut.end());
+        for (Index j : cut) {
+            const std::uint64_t end = BinTimeline::next_aligned(now, bin[j]);
+            dt[j] = tl.seconds(BinTimeline::length(bin[j]));
+            if (end < ti_end[j]) {
+                ti_end[j] = end;
+                buckets.due[end].push_back(j);
+                ++woken_count;
+            }
+        }
+        // The stable step of this step: the shortest Delta t_i^raw evaluated (checked against
+        // dt_min by the engine, which names this system when it collapses).
+        s.dt_stable = tbb::parallel_reduce(
+            tbb::blocked_range<std::size_t>(0, set.size(), kGrain), std::numeric_limits<double>::infinity(),
+            [&](const auto& r, double m) {
+                for (std::size_t k = r.begin(); k < r.end(); ++k) m = std::min(m, dt_raw[set[k]]);
+                return m;
+            },
+            [](double a, double b) { return std::min(a, b); });
+    }
+    // The next due time: the earliest bucket holding a particle that is still due there.
+    while (!buckets.due.empty()) {
+        const auto it = buckets.due.begin();
+        const auto& v = it->second;
+        if (it->first > now && std::any_of(v.begin(), v.end(), [&](Index i) { return ti_end[i] == it->first; })) break;
+        buckets.due.erase(it);
+    }
+    tl.next = buckets.due.empty() ? now + BinTimeline::length(tl.max_bin) : buckets.due.begin()->first;
+    const Tick ticks = std::max<Tick>(1, ticks_of(tl, tl.next) - ctx.clock().t_ticks);
+    s.set_clipped(2 * to_seconds(ticks), ticks, ctx.clock());
+    ctx.write(counter::woken) = woken_count;
+    ctx.write(counter::limiter_passes) = passes;
+}
+
+}  // namespace sph

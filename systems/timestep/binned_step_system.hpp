@@ -1,0 +1,43 @@
+#pragma once
+/// @file binned_step_system.hpp
+/// @brief Binned stepping, after the forces: each active particle's new bin, the neighbour
+/// limiter and wake-up, and the step to the next due time.
+///
+/// 1. Raw bin: the largest bin whose step fits the particle's Delta t_i^raw (He eq. 6-8 per
+///    particle, computed by the forces system). A step may shrink at any time; it may grow by
+///    one bin, and only when `now` is a multiple of the larger step (SWIFT, timestep.h).
+/// 2. Limiter (Saitoh & Makino 2009, SWIFT's time_bin_neighbour_max_delta_bin = 2) in place of
+///    He et al. Alg. 2 line 16: bin_i <= bin_j + 2 for every j in i's fresh list, i.e. no step
+///    more than 4x a neighbour's. Among the active particles this is a fixed point, reached by
+///    repeated passes of bin_i = min(bin_i, min_j bin_j + 2) (bins only fall, so it is unique
+///    whatever the order of updates: the result does not depend on the thread schedule).
+/// 3. Wake-up: a sleeping neighbour j of an active i with bin_j > bin_i + 2 gets bin_i + 2 and
+///    its step cut to end at the first multiple of that bin's step after now. Its state is
+///    extrapolated from its last evaluation (He Alg. 2 lines 19-21), so the cut holds no
+///    acceleration past the new end. A lowered sleeping bin may in turn bound an active one,
+///    so steps 2-3 repeat until a wake-up pass changes nothing.
+/// 4. Every active and woken particle is filed under its new end; the next step ends at the
+///    earliest end with a live entry (stale entries of woken particles are dropped there),
+///    clipped to the run's end and frame times by the engine.
+/// Afterwards, for every active i and every j in i's list, |bin_i - bin_j| <= 2.
+#include <array>
+#include <vector>
+
+#include "engine/core/types.hpp"
+#include "engine/graph/system.hpp"
+
+namespace sph {
+
+class BinnedStepSystem final : public System {
+public:
+    std::string name() const override { return "binned_step"; }
+    Access access() const override;
+    void register_components(World& w) override;
+    void run(Context& ctx) override;
+
+private:
+    std::array<std::vector<Index>, 41> m_by_bin;  ///< this step's active rows by new bin (reused)
+    std::vector<Index> m_limit, m_wake;           ///< active rows the limiter / wake-up must visit
+};
+
+}  // namespace sph
