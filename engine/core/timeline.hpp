@@ -16,6 +16,8 @@
 namespace sph {
 
 struct BinTimeline {
+    /// The scene's time keys lie in [1e-9, 1e6] s, so dt_max / dt_min < 2^50: 52 bins always do.
+    static constexpr int kMaxBin = 52;
     double quantum = 0;   ///< q, s
     int max_bin = 0;      ///< bin of dt_max
     std::uint64_t now = 0;   ///< the due time of the last step that started on the timeline
@@ -24,7 +26,7 @@ struct BinTimeline {
     /// @brief The timeline of a run with steps in [dt_min, dt_max] (dt_min < dt_max, both > 0).
     static BinTimeline for_range(double dt_min, double dt_max) {
         BinTimeline t;
-        t.max_bin = std::min(40, std::max(0, int(std::ceil(std::log2(dt_max / dt_min)))));
+        t.max_bin = std::min(kMaxBin, std::max(0, int(std::ceil(std::log2(dt_max / dt_min)))));
         t.quantum = std::ldexp(dt_max, -t.max_bin);
         return t;
     }

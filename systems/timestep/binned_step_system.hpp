@@ -23,6 +23,7 @@
 #include <array>
 #include <vector>
 
+#include "engine/core/timeline.hpp"
 #include "engine/core/types.hpp"
 #include "engine/graph/system.hpp"
 
@@ -36,7 +37,7 @@ public:
     void run(Context& ctx) override;
 
 private:
-    std::array<std::vector<Index>, 41> m_by_bin;  ///< this step's active rows by new bin (reused)
+    std::array<std::vector<Index>, BinTimeline::kMaxBin + 1> m_by_bin;  ///< this step's active rows by new bin (reused)
     std::vector<Index> m_limit, m_wake;           ///< active rows the limiter / wake-up must visit
 };
 

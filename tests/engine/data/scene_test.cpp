@@ -137,7 +137,7 @@ TEST(SceneLoader, SuggestionsIgnoreCaseAndAllowTranspositions) {
                               "s.json");
               }),
               "s.json: /simulation/stepping/mode: found \"Global\", expected one of \"constant\", "
-              "\"global\", \"individual\", \"adaptive\" (did you mean \"global\"?)");
+              "\"global\", \"individual\", \"binned\", \"adaptive\" (did you mean \"global\"?)");
     EXPECT_EQ(
         error_of([] { parse_scene(R"({"name": "t", "fluid": {"viscostiy": 0.1}})", "s.json"); }),
         "s.json: /fluid: found unknown key \"viscostiy\", expected one of: rest_density, "
@@ -342,7 +342,7 @@ TEST(SceneLoader, InvalidOverrideSaysItWasSetOnTheCommandLine) {
                   parse_scene(k_minimal, "m.json", {{"/simulation/stepping/mode", "globel"}});
               }),
               "m.json: /simulation/stepping/mode: found \"globel\", expected one of \"constant\", "
-              "\"global\", \"individual\", \"adaptive\" (did you mean \"global\"?) (set on the command line)");
+              "\"global\", \"individual\", \"binned\", \"adaptive\" (did you mean \"global\"?) (set on the command line)");
     EXPECT_EQ(error_of([] {
                   parse_scene(k_minimal, "m.json", {{"/simulation/endtime", 2}});
               }),

@@ -1,0 +1,278 @@
+// Binned stepping (systems/timestep/binned_step_system.hpp) on whole runs: it reduces to
+// `global` when every particle is held to one bin; after every step its bins are exactly the
+// limiter's and the wake-up's rules recomputed by brute force; its work counters are the active
+// set; and a slab falling onto a sleeping pool wakes it.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <vector>
+
+#include "engine/data/components.hpp"
+#include "systems/methods/recipes.hpp"
+#include "systems/methods/wcsph.hpp"
+#include "systems/timestep/binned_state.hpp"
+#include "test_scenes.hpp"
+
+using namespace sph;
+
+namespace {
+
+Scene with_mode(Scene s, SteppingMode mode, bool acoustic) {
+    s.simulation.stepping.mode = mode;
+    s.simulation.stepping.acoustic = acoustic;
+    s.simulation.frame_rate = 0;
+    return s;
+}
+
+const BinTimeline& timeline(const Simulation& sim) {
+    return sim.world().resources.get<BinTimeline>(res::bin_timeline.name);
+}
+
+}  // namespace
+
+// Held to one bin: dt_max = 0.2 ms is below every particle's raw step during the first 200
+// steps of dam_break (asserted: every particle is active at every step), so every particle is
+// in the top bin and evaluated at every step with Delta t = dt_max. Its arithmetic (He Alg. 2
+// lines 19-21 with x_last = x, v_last = v) is then `global`'s symplectic Euler, float for float:
+// the bound is exact equality of every position and velocity.
+TEST(BinnedStepping, OneBinReproducesGlobal) {
+    Scene base = load_scene(SPH_SOURCE_DIR "/scenes/dam_break.json");
+    base.simulation.stepping.dt_max = 2e-4;
+    auto global = make_simulation(with_mode(base, SteppingMode::Global, true));
+    auto binned = make_simulation(with_mode(base, SteppingMode::Binned, true));
+    const std::size_t n = global->world().fluid.size();
+    for (int s = 0; s < 200; ++s) {
+        global->step();
+        binned->step();
+        ASSERT_EQ(binned->world().counter_value("active"), n) << "step " << s << ": not every particle was in one bin";
+        ASSERT_EQ(binned->world().step_size.dt_ticks, global->world().step_size.dt_ticks) << "step " << s;
+    }
+    const auto xg = global->world().fluid.store.get(comp::position), xb = binned->world().fluid.store.get(comp::position);
+    const auto vg = global->world().fluid.store.get(comp::velocity), vb = binned->world().fluid.store.get(comp::velocity);
+    double dx = 0, dv = 0, moved = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+        dx = std::max(dx, double((xg[i] - xb[i]).norm()));
+        dv = std::max(dv, double((vg[i] - vb[i]).norm()));
+        moved = std::max(moved, double(vg[i].norm()));
+    }
+    EXPECT_GT(moved, 0.1);  // the column is collapsing: the comparison is not of a still state
+    EXPECT_EQ(dx, 0.0);
+    EXPECT_EQ(dv, 0.0);
+    std::printf("200 steps in one bin (t = %.3f s): max |x_bin - x_glob| = %g m, max |v_bin - v_glob| = %g m/s\n",
+                binned->time(), dx, dv);
+}
+
+namespace {
+
+struct OracleTally {
+    std::int64_t steps = 0, checked_active = 0, checked_sleeping = 0, limited = 0, woken = 0, cut = 0;
+    double min_fraction = 1, max_fraction = 0;
+};
+
+/// dam_break in `binned` without the acoustic condition (so bins differ), no spatial sort (rows
+/// keep their index between steps); after every step the bins and ends are recomputed by brute
+/// force from the state before the step and compared exactly.
+OracleTally check_against_brute_force(double end) {
+    Scene s = with_mode(load_scene(SPH_SOURCE_DIR "/scenes/dam_break.json"), SteppingMode::Binned, false);
+    s.simulation.sort_interval = 0;
+    auto sim = make_simulation(s);
+    const std::size_t n = sim->world().fluid.size();
+    std::vector<std::uint8_t> old_bin(n, 0);
+    std::vector<std::uint64_t> old_end(n, 0);
+    OracleTally tally;
+    sim->run_until(end, [&](const Simulation& sm) {
+        const World& w = sm.world();
+        const BinTimeline& tl = timeline(sm);
+        const auto bin = w.fluid.store.get(comp::bin);
+        const auto ti_end = w.fluid.store.get(comp::ti_end);
+        const auto dt_raw = w.fluid.store.get(comp::dt_raw);
+        const auto dt = w.fluid.store.get(comp::dt);
+        const auto& set = w.active_set;
+        const NeighbourLists& lists = w.fluid_neighbours;
+        std::vector<char> is_active(n, 0), hit(n, 0);
+        for (Index i : set) is_active[i] = 1;
+        for (Index i : w.collided) hit[i] = 1;
+        const std::uint64_t now = tl.now;
+        const double fraction = double(set.size()) / double(n);
+        if (!set.empty()) {
+            tally.min_fraction = std::min(tally.min_fraction, fraction);
+            tally.max_fraction = std::max(tally.max_fraction, fraction);
+        }
+        // A particle the collision net corrected had its bin lowered after the limiter ran
+        // (BinnedWakeSystem): a rule that reads its bin is checked as an upper bound only.
+        // Sleeping rows: the smallest bin + 2 among the active particles whose list holds them.
+        std::vector<int> cap(n, 255);
+        std::vector<char> near_hit(n, 0);
+        for (Index i : set)
+            for (Index j : lists.of(i)) {
+                if (hit[i]) {
+                    near_hit[j] = 1;
+                    continue;
+                }
+                cap[j] = std::min<int>(cap[j], bin[i] + 2);
+            }
+        for (Index i : set) {
+            if (hit[i]) continue;  // the collision net cut its step after the limiter
+            int raw = tl.bin_for(dt_raw[i]);
+            if (now > 0 && raw > old_bin[i]) raw = BinTimeline::aligned(now, old_bin[i] + 1) ? old_bin[i] + 1 : old_bin[i];
+            int expected = raw;
+            bool exact = true;
+            for (Index j : lists.of(i)) {
+                if (hit[j]) {
+                    exact = false;
+                    continue;
+                }
+                expected = std::min<int>(expected, bin[j] + 2);
+            }
+            if (!exact) {
+                ASSERT_LE(int(bin[i]), expected) << "active particle " << i << " at step " << w.clock.step;
+                continue;
+            }
+            ASSERT_EQ(int(bin[i]), expected) << "active particle " << i << " at step " << w.clock.step;
+            ASSERT_EQ(ti_end[i], now + BinTimeline::length(bin[i]));
+            ASSERT_EQ(dt[i], tl.seconds(BinTimeline::length(bin[i])));
+            tally.limited += expected < raw;
+            ++tally.checked_active;
+        }
+        for (std::size_t j = 0; j < n; ++j) {
+            if (is_active[j] || hit[j]) continue;
+            const int expected = std::min<int>(old_bin[j], cap[j]);
+            if (near_hit[j]) {
+                ASSERT_LE(int(bin[j]), expected) << "sleeping particle " << j << " at step " << w.clock.step;
+                ASSERT_GT(ti_end[j], now);
+                continue;
+            }
+            ASSERT_EQ(int(bin[j]), expected) << "sleeping particle " << j << " at step " << w.clock.step;
+            const std::uint64_t end_expected =
+                expected < old_bin[j] ? std::min(old_end[j], BinTimeline::next_aligned(now, expected)) : old_end[j];
+            ASSERT_EQ(ti_end[j], end_expected) << "sleeping particle " << j;
+            ASSERT_GT(ti_end[j], now);
+            tally.woken += expected < old_bin[j];
+            tally.cut += end_expected < old_end[j];
+            if (cap[j] < 255) ++tally.checked_sleeping;
+        }
+        // A collided particle is due at the next due time, on a bin that time allows.
+        for (Index i : w.collided) {
+            ASSERT_EQ(ti_end[i], tl.next);
+            ASSERT_TRUE(BinTimeline::aligned(tl.next, bin[i]));
+        }
+        // Every particle's end is on its bin's grid, and the next step ends at the earliest.
+        std::uint64_t earliest = ~std::uint64_t(0);
+        for (std::size_t i = 0; i < n; ++i) {
+            ASSERT_TRUE(BinTimeline::aligned(ti_end[i], bin[i])) << i;
+            earliest = std::min(earliest, ti_end[i]);
+        }
+        ASSERT_EQ(tl.next, earliest);
+        std::copy(bin.begin(), bin.end(), old_bin.begin());
+        std::copy(ti_end.begin(), ti_end.end(), old_end.begin());
+        ++tally.steps;
+    });
+    return tally;
+}
+
+}  // namespace
+
+// The limiter and the wake-up (binned_step_system.hpp) against brute force at every step of the
+// dam_break collapse and impact (0.6 s): each active bin is min(raw bin with the growth rule,
+// min over its list of bin_j + 2); each sleeping bin is min(its old bin, min over the active
+// particles listing it of bin_i + 2), its end cut to the first multiple of the new step after
+// now; every end lies on its bin's grid; the next step ends at the earliest end. Exact integer
+// equality. The run covers steps from under 1 % to 100 % active (asserted), and the limiter and
+// the wake-up both act (asserted), so the oracle checks more than the trivial case.
+TEST(BinnedStepping, LimiterAndWakeUpMatchBruteForce) {
+    const OracleTally t = check_against_brute_force(0.6);
+    std::printf("%lld steps, active %.2f-%.0f %%; %lld active and %lld sleeping bins checked, %lld limited, %lld "
+                "sleeping bins lowered, %lld ends cut\n",
+                static_cast<long long>(t.steps), 100 * t.min_fraction, 100 * t.max_fraction,
+                static_cast<long long>(t.checked_active), static_cast<long long>(t.checked_sleeping),
+                static_cast<long long>(t.limited), static_cast<long long>(t.woken), static_cast<long long>(t.cut));
+    EXPECT_LT(t.min_fraction, 0.01);
+    EXPECT_EQ(t.max_fraction, 1.0);
+    EXPECT_GT(t.limited, 0);
+    EXPECT_GT(t.woken, 0);
+    EXPECT_GT(t.cut, 0);
+}
+
+// The counters in stats.csv are the work done: lists rebuilt and forces evaluated equal the
+// active count at every step; the collision net visits only active rows (it can correct no
+// more than them); and a resting pool is mostly asleep.
+TEST(BinnedStepping, WorkCountersAreTheActiveSet) {
+    Scene s = with_mode(test::tank_scene(Vec3d(0.3, 0.2, 0.1), Vec3d(0.3, 0.3, 0.1)), SteppingMode::Binned, false);
+    s.fluid_blocks[0].hydrostatic = true;
+    auto sim = make_simulation(s);
+    const std::size_t n = sim->world().fluid.size();
+    double active_sum = 0;
+    int steps = 0;
+    sim->run_until(0.3, [&](const Simulation& sm) {
+        const World& sw = sm.world();
+        const std::uint64_t active = sw.counter_value("active");
+        ASSERT_EQ(sw.counter_value("neighbour_searches"), active);
+        ASSERT_EQ(sw.counter_value("force_evaluations"), active);
+        ASSERT_EQ(sw.counter_value("updated"), active);
+        ASSERT_EQ(sw.active_set.size(), active);
+        ASSERT_LE(sw.counter_value("collisions"), active);
+        active_sum += double(active) / double(n);
+        ++steps;
+    });
+    std::printf("resting pool, %d steps, average active fraction %.3f\n", steps, active_sum / steps);
+    EXPECT_LT(active_sum / steps, 0.9);
+}
+
+// Wake-up (notes sec. 4.1): a slab falls 0.15 m onto a resting pool whose particles sleep on
+// long steps, without the collision safety net, so the particle boundary alone must hold. The
+// same bounds as `individual`'s test (tests/scenarios/individual_stepping_test.cpp): no NaN (the
+// engine throws), no particle centre beyond the wall's sample layer (r), a maximum density
+// error below 5 %, a splash height within 15 % of `global`'s; and most of the pool asleep before
+// the impact, so the impact must wake it.
+TEST(BinnedStepping, SlabWakesSleepingPool) {
+    Scene s = test::tank_scene(Vec3d(0.3, 0.12, 0.08), Vec3d(0.3, 0.4, 0.08));
+    s.fluid_blocks[0].hydrostatic = true;
+    s.fluid_blocks.push_back(FluidBlock{Aabb{Vec3d(0.1, 0.27, 0.0), Vec3d(0.2, 0.33, 0.08)}, Vec3d::Zero(), false});
+    const std::uint32_t n_pool = std::uint32_t(lattice_dims(s.fluid_blocks[0].box, 2 * s.fluid.particle_radius).prod());
+    struct Result {
+        double max_err = 0, splash = 0, penetration = 0, pool_active_before = 0;
+    };
+    auto run = [&](SteppingMode mode) {
+        const Scene sc = with_mode(s, mode, false);
+        Recipe recipe = make_wcsph_recipe(sc);
+        // The safety net and what follows it (binned: the wake of the particles it corrected).
+        while (recipe.step.back()->name() != "boundary_collision") recipe.step.pop_back();
+        recipe.step.pop_back();
+        Simulation sim(sc, std::move(recipe));
+        const Aabb box = sc.boundaries[0].box;
+        Result r;
+        int before = 0;
+        sim.run_until(0.45, [&](const Simulation& sm) {
+            const World& w = sm.world();
+            const auto x = w.fluid.store.get(comp::position);
+            const auto id = w.fluid.store.get(comp::id);
+            const double t = sm.time();
+            r.max_err = std::max(r.max_err, w.stats.rho_err_max);
+            for (std::size_t i = 0; i < x.size(); ++i) {
+                for (int a = 0; a < 3; ++a)
+                    r.penetration = std::max({r.penetration, box.min[a] - x[i][a], x[i][a] - box.max[a]});
+                if (t > 0.2 && id[i] < n_pool) r.splash = std::max(r.splash, double(x[i].y()));
+            }
+            if (mode == SteppingMode::Binned && t > 0.10 && t < 0.17) {  // last part of the fall
+                std::size_t pool_active = 0;
+                for (Index i : w.active_set) pool_active += id[i] < n_pool;
+                r.pool_active_before += double(pool_active) / n_pool;
+                ++before;
+            }
+        });
+        if (before) r.pool_active_before /= before;
+        return r;
+    };
+    const Result g = run(SteppingMode::Global);
+    const Result b = run(SteppingMode::Binned);
+    std::printf("global: max density error %.2f %%, splash %.3f m, penetration %.2f mm\n", 100 * g.max_err, g.splash,
+                1e3 * g.penetration);
+    std::printf("binned: max density error %.2f %%, splash %.3f m, penetration %.2f mm, pool active before impact "
+                "%.1f %%\n",
+                100 * b.max_err, b.splash, 1e3 * b.penetration, 100 * b.pool_active_before);
+    EXPECT_LT(b.pool_active_before, 0.6);
+    EXPECT_LT(b.max_err, 0.05);
+    EXPECT_LT(b.penetration, s.fluid.particle_radius);
+    EXPECT_NEAR(b.splash, g.splash, 0.15 * (g.splash - 0.12));
+}
