@@ -111,6 +111,21 @@ HWY_INLINE PairChunk<D> pair_chunk(D d, const Real* xs, const Broadcast3<D>& xi,
     return {j, j3, hn::RebindMask(d, in), dx, dy, dz, norm2(dx, dy, dz)};
 }
 
+/// Software prefetch ahead of a pair loop over a subset of rows, at row q of [.., end): the list
+/// of the row kListAhead rows on, and the positions named by the list of the row kPairsAhead
+/// rows on (fetched two rows earlier). The gathers wait on memory, not arithmetic, and the rows
+/// of a subset (binned and individual stepping) are too scattered for the hardware prefetcher.
+/// Over all rows (rows == nullptr) the hardware prefetcher does better and nothing is issued.
+/// docs/results/benchmarks.md has the measurements.
+template <class Lists>
+HWY_INLINE void prefetch_ahead(const Lists& lists, const Real* x, const Index* rows, std::size_t q, std::size_t end) {
+    constexpr std::size_t kListAhead = 4, kPairsAhead = 2;
+    if (!rows) return;
+    if (q + kListAhead < end) __builtin_prefetch(lists.of(rows[q + kListAhead]).data());
+    if (q + kPairsAhead < end)
+        for (const Index j : lists.of(rows[q + kPairsAhead])) __builtin_prefetch(x + 3 * std::size_t(j));
+}
+
 }  // namespace HWY_NAMESPACE
 }  // namespace sph
 HWY_AFTER_NAMESPACE();

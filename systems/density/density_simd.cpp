@@ -39,6 +39,7 @@ void KernelSums(const KernelSumArgs& a, const Index* rows, std::size_t begin, st
     const KernelV<decltype(d)> k(d, *a.kernel);
     for (std::size_t q = begin; q < end; ++q) {
         const Index i = rows ? rows[q] : Index(q);
+        prefetch_ahead(*a.fluid, a.x, rows, q, end);
         const Broadcast3<decltype(d)> xi = broadcast3(d, a.x + 3 * std::size_t(i));
         fluid_sum[q - begin] = kernel_sum(d, k, a.x, xi, a.fluid->of(i).data(), a.fluid->count[i], nullptr);
         if (a.xb)

@@ -71,6 +71,7 @@ void ForceRows(const ForcePairArgs& a, const Index* rows, std::size_t begin, std
     const bool viscous = a.alpha > 0, viscous_b = a.alpha_b > 0;
     for (std::size_t q = begin; q < end; ++q) {
         const Index i = rows ? rows[q] : Index(q);
+        prefetch_ahead(*a.fluid, a.x, rows, q, end);
         const Broadcast3<D> xi = broadcast3(d, a.x + 3 * std::size_t(i));
         const Broadcast3<D> vi = broadcast3(d, a.v + 3 * std::size_t(i));
         const Real rhoi = a.rho[i];
