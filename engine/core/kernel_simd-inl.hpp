@@ -115,15 +115,22 @@ HWY_INLINE PairChunk<D> pair_chunk(D d, const Real* xs, const Broadcast3<D>& xi,
 /// of the row kListAhead rows on, and the positions named by the list of the row kPairsAhead
 /// rows on (fetched two rows earlier). The gathers wait on memory, not arithmetic, and the rows
 /// of a subset (binned and individual stepping) are too scattered for the hardware prefetcher.
-/// Over all rows (rows == nullptr) the hardware prefetcher does better and nothing is issued.
-/// docs/results/benchmarks.md has the measurements.
+/// Over all rows (rows == nullptr) or a dense run of them the hardware prefetcher does better
+/// and nothing is issued: `sparse` says whether the caller's rows are scattered (see
+/// rows_are_sparse). docs/results/benchmarks.md has the measurements.
 template <class Lists>
-HWY_INLINE void prefetch_ahead(const Lists& lists, const Real* x, const Index* rows, std::size_t q, std::size_t end) {
+HWY_INLINE void prefetch_ahead(const Lists& lists, const Real* x, const Index* rows, bool sparse, std::size_t q,
+                               std::size_t end) {
     constexpr std::size_t kListAhead = 4, kPairsAhead = 2;
-    if (!rows) return;
+    if (!sparse) return;
     if (q + kListAhead < end) __builtin_prefetch(lists.of(rows[q + kListAhead]).data());
     if (q + kPairsAhead < end)
         for (const Index j : lists.of(rows[q + kPairsAhead])) __builtin_prefetch(x + 3 * std::size_t(j));
+}
+
+/// Whether rows[begin, end) (ascending) are scattered: they span more than twice their count.
+HWY_INLINE bool rows_are_sparse(const Index* rows, std::size_t begin, std::size_t end) {
+    return rows && end > begin && std::size_t(rows[end - 1] - rows[begin]) > 2 * (end - begin);
 }
 
 }  // namespace HWY_NAMESPACE

@@ -62,6 +62,7 @@ void Simulation::trace_non_finite(std::size_t system) {
     // A system that declares its rows (Access::rows) is checked there only.
     const std::vector<Index>* rows = nullptr;
     if (access.written_rows() == key_of(res::active_set)) rows = &m_world.active_set;
+    if (access.written_rows() == key_of(res::collided)) rows = &m_world.collided;
     for (const auto& wr : access.writes()) {
         if (wr.rfind("fluid.", 0) != 0) continue;
         const std::string col = wr.substr(6);

@@ -37,9 +37,10 @@ void KernelSums(const KernelSumArgs& a, const Index* rows, std::size_t begin, st
                 Real* boundary_sum) {
     hn::ScalableTag<Real> d;
     const KernelV<decltype(d)> k(d, *a.kernel);
+    const bool sparse = rows_are_sparse(rows, begin, end);
     for (std::size_t q = begin; q < end; ++q) {
         const Index i = rows ? rows[q] : Index(q);
-        prefetch_ahead(*a.fluid, a.x, rows, q, end);
+        prefetch_ahead(*a.fluid, a.x, rows, sparse, q, end);
         const Broadcast3<decltype(d)> xi = broadcast3(d, a.x + 3 * std::size_t(i));
         fluid_sum[q - begin] = kernel_sum(d, k, a.x, xi, a.fluid->of(i).data(), a.fluid->count[i], nullptr);
         if (a.xb)

@@ -69,9 +69,10 @@ void ForceRows(const ForcePairArgs& a, const Index* rows, std::size_t begin, std
     const auto alpha_2hc = hn::Set(d, Real(2) * a.alpha * a.h * a.speed_of_sound);
     const auto alpha_b_2hc = hn::Set(d, Real(2) * a.alpha_b * a.h * a.speed_of_sound);
     const bool viscous = a.alpha > 0, viscous_b = a.alpha_b > 0;
+    const bool sparse = rows_are_sparse(rows, begin, end);
     for (std::size_t q = begin; q < end; ++q) {
         const Index i = rows ? rows[q] : Index(q);
-        prefetch_ahead(*a.fluid, a.x, rows, q, end);
+        prefetch_ahead(*a.fluid, a.x, rows, sparse, q, end);
         const Broadcast3<D> xi = broadcast3(d, a.x + 3 * std::size_t(i));
         const Broadcast3<D> vi = broadcast3(d, a.v + 3 * std::size_t(i));
         const Real rhoi = a.rho[i];

@@ -11,6 +11,7 @@ namespace sph {
 
 Access BinnedWakeSystem::access() const {
     return Access()
+        .rows(res::collided)
         .read(res::collided, res::bin_timeline, res::dt, fluid(comp::position), fluid(comp::velocity),
               fluid(comp::density))
         .write(fluid(comp::bin), fluid(comp::ti_end), fluid(comp::dt), fluid(comp::position_last),
