@@ -148,24 +148,43 @@ CandidateCache& cache_for(const UniformGrid& grid, CandidateCache& cache, const 
     return cache;
 }
 
-/// Every list, back to back per block of query particles, written straight into the block
-/// (no copy): a block grows when its next query's candidates might not fit.
+/// Every list (or the subset's), back to back per block of query particles, written straight
+/// into the block (no copy): a block grows when its next query's candidates might not fit.
 void build_compact(const UniformGrid& grid, std::span<const Vec3> query_positions, Real r2, bool exclude_self,
-                   NeighbourLists& lists, bool simd) {
+                   const QuerySubset& subset, NeighbourLists& lists, bool simd) {
     const std::size_t n = query_positions.size();
     constexpr std::size_t B = NeighbourLists::kBlock;
-    lists.capacity = 0;
-    std::vector<Index>().swap(lists.indices);
-    lists.count.resize(n);
-    lists.start.resize(n);
+    const bool every = subset.all;
+    if (lists.capacity != 0 || lists.count.size() != n) {  // from the slab layout or another size
+        lists.capacity = 0;
+        std::vector<Index>().swap(lists.indices);
+        lists.count.assign(n, 0);
+        lists.start.assign(n, 0);
+        lists.queried.clear();
+    }
     lists.blocks.resize((n + B - 1) / B);
+    // A subset build empties the last subset's lists (the only non-empty ones besides its own),
+    // so its cost follows the two subsets, not n.
+    for (Index i : lists.queried) lists.count[i] = lists.start[i] = 0;
+    // The query rows by block: [first[k], first[k + 1]) of `rows` fall in one block.
+    const std::span<const Index> rows = subset.indices;
+    std::vector<std::size_t> first;
+    if (!every)
+        for (std::size_t k = 0; k < rows.size(); ++k)
+            if (k == 0 || rows[k] / B != rows[k - 1] / B) first.push_back(k);
+    first.push_back(rows.size());
+    const std::size_t jobs = every ? lists.blocks.size() : first.size() - 1;
     tbb::enumerable_thread_specific<CandidateCache> caches;
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, lists.blocks.size(), 1), [&](const auto& r) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, jobs, 1), [&](const auto& r) {
         CandidateCache& cache = caches.local();
-        for (std::size_t b = r.begin(); b < r.end(); ++b) {
+        for (std::size_t job = r.begin(); job < r.end(); ++job) {
+            const std::size_t b = every ? job : rows[first[job]] / B;
+            const std::size_t q_begin = every ? b * B : first[job];
+            const std::size_t q_end = every ? std::min(n, (b + 1) * B) : first[job + 1];
             std::vector<Index>& buf = lists.blocks[b];
             std::size_t used = 0;
-            for (std::size_t i = b * B; i < std::min(n, (b + 1) * B); ++i) {
+            for (std::size_t q = q_begin; q < q_end; ++q) {
+                const std::size_t i = every ? q : rows[q];
                 const Vec3 xi = query_positions[i];
                 cache_for(grid, cache, xi);
                 // Room for every candidate plus a vector of slack (the vectorised filter's
@@ -180,13 +199,18 @@ void build_compact(const UniformGrid& grid, std::span<const Vec3> query_position
                 lists.count[i] = c;
                 used += c;
             }
-            // A block that needs less than half of what it holds gives the rest back.
-            if (buf.size() > 2 * (used + NeighbourLists::kSlack) + 4096) {
+            // A block that needs less than half of what it holds gives the rest back (on full
+            // builds: a subset's share of a block changes from step to step).
+            if (every && buf.size() > 2 * (used + NeighbourLists::kSlack) + 4096) {
                 buf.resize(used + NeighbourLists::kSlack);
                 buf.shrink_to_fit();
             }
         }
     });
+    if (every)
+        lists.queried.clear();
+    else
+        lists.queried.assign(rows.begin(), rows.end());
 }
 
 /// The lists of the subset, each in its fixed slot of `capacity` entries.
@@ -206,6 +230,7 @@ void build_slab(const UniformGrid& grid, std::span<const Vec3> query_positions, 
             lists.indices.swap(slab);
         }
         lists.capacity = cap;
+        lists.queried.clear();
         std::vector<Index>().swap(lists.start);
         std::vector<std::vector<Index>>().swap(lists.blocks);
     }
@@ -256,8 +281,8 @@ void build_neighbour_lists(const UniformGrid& grid, std::span<const Vec3> query_
                            Real radius, bool exclude_self, const QuerySubset& subset,
                            NeighbourLists& lists, bool simd) {
     const Real r2 = radius * radius;
-    if (subset.all)
-        build_compact(grid, query_positions, r2, exclude_self, lists, simd);
+    if (subset.all || !subset.keep_others)
+        build_compact(grid, query_positions, r2, exclude_self, subset, lists, simd);
     else
         build_slab(grid, query_positions, r2, exclude_self, subset, lists, simd);
 }
@@ -266,10 +291,12 @@ void NeighbourLists::permute(std::span<const Index> perm, bool remap_entries) {
     const std::size_t n = count.size();
     if (n == 0 || perm.size() != n) return;
     std::vector<Index> inverse;
-    if (remap_entries) {
+    if (remap_entries || !queried.empty()) {
         inverse.resize(n);
         for (std::size_t i = 0; i < n; ++i) inverse[perm[i]] = Index(i);
     }
+    for (Index& i : queried) i = inverse[i];
+    std::sort(queried.begin(), queried.end());
     auto copy_list = [&](Index from, Index* dst) {
         const auto src = of(from);
         for (std::size_t k = 0; k < src.size(); ++k) dst[k] = remap_entries ? inverse[src[k]] : src[k];
@@ -338,6 +365,9 @@ void NeighbourLists::assign_compact(std::vector<Index> counts, std::span<const I
         for (std::size_t i = b * kBlock; i < end; ++i) start[i] = Index(used), used += count[i];
         from += used;
     }
+    queried.clear();
+    for (std::size_t i = 0; i < n; ++i)
+        if (count[i] > 0) queried.push_back(Index(i));
 }
 
 namespace {

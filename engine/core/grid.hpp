@@ -142,7 +142,8 @@ struct CandidateCache {
 ///   be rebuilt in place while the others keep theirs (individual stepping). Capacity grows
 ///   (and every list is rebuilt) when a particle has more neighbours.
 /// * compact (capacity == 0): every list rebuilt at once (global, constant, PCISPH), stored
-///   back to back in blocks of kBlock query particles, about 2.5x smaller than a slab.
+///   back to back in blocks of kBlock query particles, about 2.5x smaller than a slab; or the
+///   lists of a subset only (binned stepping), every other list empty.
 /// Either way a list may be read a whole vector (kSlack entries) past its end.
 struct NeighbourLists {
     static constexpr std::size_t kBlock = 256;  ///< query particles per compact block
@@ -152,6 +153,9 @@ struct NeighbourLists {
     std::vector<Index> indices;  ///< slab: count.size() * capacity
     std::vector<Index> start;    ///< compact: first entry of each list in its block
     std::vector<std::vector<Index>> blocks;  ///< compact: the lists of particles [kBlock b, kBlock (b + 1))
+    /// Compact: the particles of the last subset build, ascending (the only non-empty lists);
+    /// empty after a build of every list. Lets the next subset build empty just those.
+    std::vector<Index> queried;
 
     bool compact() const { return capacity == 0; }
     std::span<const Index> of(Index i) const {
@@ -166,7 +170,8 @@ struct NeighbourLists {
     void permute(std::span<const Index> perm, bool remap_entries);
     /// @brief Every list, one after another in query order (the checkpoint form).
     std::vector<Index> concatenated() const;
-    /// @brief The compact layout from counts and concatenated lists (as concatenated() gives).
+    /// @brief The compact layout from counts and concatenated lists (as concatenated() gives);
+    /// `queried` becomes the particles with a non-empty list.
     void assign_compact(std::vector<Index> counts, std::span<const Index> entries);
 };
 
@@ -176,8 +181,12 @@ std::vector<Index> collect_indices(std::size_t n, Pred&& pred);
 
 /// @brief Which particles to (re)build lists for: all of them, or an explicit subset.
 struct QuerySubset {
-    std::span<const Index> indices;  ///< empty with all == true means every particle
+    std::span<const Index> indices;  ///< ascending; empty with all == true means every particle
     bool all = true;
+    /// Whether the other particles keep their lists (individual stepping reads them): the slab
+    /// layout. Otherwise (binned stepping) the subset's lists are built compact and every other
+    /// list is empty.
+    bool keep_others = true;
 };
 
 /// @brief Builds the lists of the query particles against the particles of `grid`: every j

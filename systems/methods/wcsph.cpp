@@ -44,8 +44,9 @@ Recipe make_wcsph_recipe(const Scene& scene) {
         r.step.push_back(std::make_unique<SelectActiveSystem>(stepping.activation));
     if (binned) r.step.push_back(std::make_unique<BinnedSelectSystem>(stepping.dt_min, stepping.dt_max));
     r.step.push_back(std::make_unique<FluidGridSystem>());
-    r.step.push_back(std::make_unique<FluidNeighbourSystem>(individual));
-    if (boundary) r.step.push_back(std::make_unique<BoundaryNeighbourSystem>(individual));
+    // binned reads only the active particles' lists: compact, the others emptied.
+    r.step.push_back(std::make_unique<FluidNeighbourSystem>(individual, !binned));
+    if (boundary) r.step.push_back(std::make_unique<BoundaryNeighbourSystem>(individual, !binned));
     if (mode == SteppingMode::Individual) r.step.push_back(std::make_unique<HaloSystem>(boundary));
     r.step.push_back(std::make_unique<DensitySystem>(boundary, individual));
     const bool corrected = scene.fluid.pressure_gradient == PressureGradient::Corrected;

@@ -9,8 +9,8 @@
 namespace sph {
 
 namespace {
-QuerySubset subset_of(const Context& ctx, bool individual) {
-    return individual ? QuerySubset{ctx.read(res::active_set), false} : QuerySubset{};
+QuerySubset subset_of(const Context& ctx, bool individual, bool keep_others) {
+    return individual ? QuerySubset{ctx.read(res::active_set), false, keep_others} : QuerySubset{};
 }
 }  // namespace
 
@@ -22,7 +22,7 @@ Access BoundaryNeighbourSystem::access() const {
 }
 void BoundaryNeighbourSystem::run(Context& ctx) {
     build_neighbour_lists(ctx.read(res::boundary_grid), ctx.read(fluid(comp::position)), ctx.physics().h, false,
-                          subset_of(ctx, m_individual), ctx.write(res::boundary_neighbours), ctx.physics().simd);
+                          subset_of(ctx, m_individual, m_keep_others), ctx.write(res::boundary_neighbours), ctx.physics().simd);
 }
 
 }  // namespace sph

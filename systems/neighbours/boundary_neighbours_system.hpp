@@ -10,13 +10,16 @@ namespace sph {
 /// particle or of the active ones.
 class BoundaryNeighbourSystem final : public System {
 public:
-    explicit BoundaryNeighbourSystem(bool individual = false) : m_individual(individual) {}
+    /// @param keep_others the other particles keep their lists (individual); false: binned.
+    explicit BoundaryNeighbourSystem(bool individual = false, bool keep_others = true)
+        : m_individual(individual), m_keep_others(keep_others) {}
     std::string name() const override { return "boundary_neighbours"; }
     Access access() const override;
     void run(Context& ctx) override;
 
 private:
     bool m_individual;
+    bool m_keep_others;
 };
 
 }  // namespace sph

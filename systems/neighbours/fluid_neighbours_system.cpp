@@ -9,8 +9,8 @@
 namespace sph {
 
 namespace {
-QuerySubset subset_of(const Context& ctx, bool individual) {
-    return individual ? QuerySubset{ctx.read(res::active_set), false} : QuerySubset{};
+QuerySubset subset_of(const Context& ctx, bool individual, bool keep_others) {
+    return individual ? QuerySubset{ctx.read(res::active_set), false, keep_others} : QuerySubset{};
 }
 }  // namespace
 
@@ -22,7 +22,7 @@ Access FluidNeighbourSystem::access() const {
 }
 // He Alg. 2 lines 3-4: fresh lists for the active particles only; the others keep theirs.
 void FluidNeighbourSystem::run(Context& ctx) {
-    const QuerySubset subset = subset_of(ctx, m_individual);
+    const QuerySubset subset = subset_of(ctx, m_individual, m_keep_others);
     build_neighbour_lists(ctx.read(res::fluid_grid), ctx.read(fluid(comp::position)), ctx.physics().h, true, subset,
                           ctx.write(res::fluid_neighbours), ctx.physics().simd);
     ctx.write(counter::neighbour_searches) = subset.all ? ctx.size(SetId::Fluid) : subset.indices.size();

@@ -10,13 +10,16 @@ namespace sph {
 /// particles keep their last lists.
 class FluidNeighbourSystem final : public System {
 public:
-    explicit FluidNeighbourSystem(bool individual = false) : m_individual(individual) {}
+    /// @param keep_others the other particles keep their lists (individual); false: binned.
+    explicit FluidNeighbourSystem(bool individual = false, bool keep_others = true)
+        : m_individual(individual), m_keep_others(keep_others) {}
     std::string name() const override { return "fluid_neighbours"; }
     Access access() const override;
     void run(Context& ctx) override;
 
 private:
     bool m_individual;
+    bool m_keep_others;
 };
 
 }  // namespace sph

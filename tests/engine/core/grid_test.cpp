@@ -184,6 +184,60 @@ TEST(NeighbourSearch, CompactListsPermuteRoundTripAndBecomeASlab) {
     expect_equal_to_brute(grid, moved, moved, h, true, lists, all);
 }
 
+// Binned stepping's layout (QuerySubset::keep_others = false): the subset's lists are built
+// compact and equal brute force; every other list is empty, including those of the previous
+// subset; a permutation carries the subset along; a full build afterwards is whole again.
+TEST(NeighbourSearch, CompactSubsetListsHoldTheSubsetOnly) {
+    for (const bool simd : {false, true}) {
+        SCOPED_TRACE(simd ? "vectorised filter" : "scalar filter");
+        const Real h = 0.08f;
+        auto pts = cloud(2500, h, 11);
+        UniformGrid grid(Aabb{Vec3d(-1, -1, -1), Vec3d(0.5, 0.5, 0.5)}, h);
+        grid.build(pts);
+        NeighbourLists lists;
+        std::vector<Index> all(pts.size());
+        for (Index i = 0; i < all.size(); ++i) all[i] = i;
+        std::mt19937 rng(5);
+        std::vector<Index> first, second;  // 10 % and 50 % of the rows, ascending
+        for (Index i = 0; i < pts.size(); ++i) {
+            if (rng() % 10 == 0) first.push_back(i);
+            if (rng() % 2 == 0) second.push_back(i);
+        }
+        auto check = [&](const std::vector<Vec3>& at, const std::vector<Index>& subset) {
+            std::vector<char> in(at.size(), 0);
+            for (Index i : subset) in[i] = 1;
+            expect_equal_to_brute(grid, at, at, h, true, lists, subset);
+            for (Index i = 0; i < at.size(); ++i)
+                if (!in[i]) ASSERT_EQ(lists.count[i], 0u) << "particle " << i << " is not in the subset";
+            EXPECT_EQ(lists.queried, subset);
+        };
+        build_neighbour_lists(grid, pts, h, true, QuerySubset{first, false, false}, lists, simd);
+        ASSERT_TRUE(lists.compact());
+        check(pts, first);
+        build_neighbour_lists(grid, pts, h, true, QuerySubset{second, false, false}, lists, simd);
+        check(pts, second);
+        // A permutation carries the subset's lists and its rows along.
+        std::vector<Index> perm(pts.size()), inverse(pts.size());
+        for (Index i = 0; i < perm.size(); ++i) perm[i] = i;
+        std::shuffle(perm.begin(), perm.end(), std::mt19937(6));
+        for (Index i = 0; i < perm.size(); ++i) inverse[perm[i]] = i;
+        std::vector<Vec3> moved(pts.size());
+        for (Index i = 0; i < perm.size(); ++i) moved[i] = pts[perm[i]];
+        lists.permute(perm, true);
+        std::vector<Index> carried;
+        for (Index i : second) carried.push_back(inverse[i]);
+        std::sort(carried.begin(), carried.end());
+        grid.build(moved);
+        check(moved, carried);
+        // The next subset build empties the carried rows that it does not query.
+        build_neighbour_lists(grid, moved, h, true, QuerySubset{first, false, false}, lists, simd);
+        check(moved, first);
+        build_neighbour_lists(grid, moved, h, true, QuerySubset{}, lists, simd);
+        EXPECT_TRUE(lists.queried.empty());
+        expect_equal_to_brute(grid, moved, moved, h, true, lists, all);
+    }
+}
+
 // A box far too large for its cell size (the 171 x 40 x 40 m dam break of the robustness
 // issue: 2^31 cells and more) is refused with the cell count and the memory, before anything
 // is allocated; one just below the limit's order of magnitude is built.
