@@ -56,7 +56,7 @@ Recipe make_wcsph_recipe(const Scene& scene) {
         individual, binned ? StepStatsSystem::Rows::Active : StepStatsSystem::Rows::All));
     if (binned) {
         // Limiter, wake-up and the next due time, then He Alg. 2 lines 18-21 for every row.
-        r.step.push_back(std::make_unique<BinnedStepSystem>());
+        r.step.push_back(std::make_unique<BinnedStepSystem>(stepping.dt_min, stepping.dt_max));
         r.step.push_back(std::make_unique<AsyncIntegrationSystem>());
     } else if (individual) {
         r.step.push_back(std::make_unique<DtPropagationSystem>());

@@ -36,7 +36,7 @@ inline constexpr Resource<DueBuckets> due_buckets{"binned.due"};
 
 /// @brief The engine tick (1 ps) of a time on the timeline, rounded to the nearest.
 inline Tick ticks_of(const BinTimeline& t, std::uint64_t quanta) {
-    return Tick(std::llround(t.seconds(quanta) / kSecondsPerTick));
+    return t.origin + Tick(std::llround(t.seconds(quanta) / kSecondsPerTick));
 }
 
 }  // namespace sph

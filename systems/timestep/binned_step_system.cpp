@@ -59,8 +59,36 @@ void BinnedStepSystem::run(Context& ctx) {
     BinTimeline& tl = ctx.write(res::bin_timeline);
     DueBuckets& buckets = ctx.write(res::due_buckets);
     StepSize& s = ctx.write(res::dt);
-    const std::uint64_t now = tl.now;
     std::uint64_t woken_count = 0, passes = 0;
+    if (!set.empty()) {
+        // The stable step of this step: the shortest Delta t_i^raw evaluated (checked against
+        // dt_min by the engine, which names this system when it collapses).
+        struct Range {
+            double lo, hi;
+        };
+        const Range raw = tbb::parallel_reduce(
+            tbb::blocked_range<std::size_t>(0, set.size(), kGrain),
+            Range{std::numeric_limits<double>::infinity(), 0.0},
+            [&](const auto& r, Range m) {
+                for (std::size_t k = r.begin(); k < r.end(); ++k) {
+                    m.lo = std::min(m.lo, dt_raw[set[k]]);
+                    m.hi = std::max(m.hi, dt_raw[set[k]]);
+                }
+                return m;
+            },
+            [](Range a, Range b) { return Range{std::min(a.lo, b.lo), std::max(a.hi, b.hi)}; });
+        s.dt_stable = raw.lo;
+        // 0. Every particle due: no step is in flight, so the timeline starts afresh here with
+        // a bin near the shortest step (BinTimeline::rebased).
+        if (set.size() == bin.size() && m_headroom > 0) {
+            const double headroom = raw.hi < 2 * raw.lo ? 1.0 : m_headroom;
+            tl = BinTimeline::rebased(raw.lo, headroom, m_dt_min, m_dt_max, ctx.clock().t_ticks);
+            buckets.due.clear();
+            buckets.bin_lo = tl.max_bin;
+            buckets.bin_hi = 0;
+        }
+    }
+    const std::uint64_t now = tl.now;
     if (!set.empty()) {
         // 1. Raw bins, with the growth rule (at t = 0 every bin is aligned and any is allowed).
         const int raw_lo = tbb::parallel_reduce(
@@ -179,15 +207,6 @@ void BinnedStepSystem::run(Context& ctx) {
                 ++woken_count;
             }
         }
-        // The stable step of this step: the shortest Delta t_i^raw evaluated (checked against
-        // dt_min by the engine, which names this system when it collapses).
-        s.dt_stable = tbb::parallel_reduce(
-            tbb::blocked_range<std::size_t>(0, set.size(), kGrain), std::numeric_limits<double>::infinity(),
-            [&](const auto& r, double m) {
-                for (std::size_t k = r.begin(); k < r.end(); ++k) m = std::min(m, dt_raw[set[k]]);
-                return m;
-            },
-            [](double a, double b) { return std::min(a, b); });
     }
     // The next due time: the earliest bucket holding a particle that is still due there.
     while (!buckets.due.empty()) {

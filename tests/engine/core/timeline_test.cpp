@@ -63,3 +63,28 @@ TEST(Timeline, AlignmentAgreesWithMultiples) {
             ASSERT_EQ(BinTimeline::largest_aligned_bin(n, 12), largest) << n;
         }
 }
+
+// Rebasing (a full synchronisation restarts the timeline): a bin at headroom x the shortest
+// step, or the fixed ladder's bin when that is as close; q <= dt_min and the top bin's step
+// <= dt_max either way; the engine tick of quantum 0 is the origin.
+TEST(Timeline, RebasedPutsABinNearTheShortestStep) {
+    const double dt_min = 1e-7, dt_max = 5e-3;
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<double> u(-6.5, std::log10(dt_max));
+    for (int n = 0; n < 5000; ++n) {
+        const double shortest = std::pow(10.0, u(rng));
+        for (const double headroom : {0.8, 1.0}) {
+            const BinTimeline t = BinTimeline::rebased(shortest, headroom, dt_min, dt_max, 12345);
+            ASSERT_EQ(t.origin, 12345);
+            ASSERT_LE(t.quantum, dt_min);
+            ASSERT_LE(t.seconds(BinTimeline::length(t.max_bin)), dt_max * (1 + 1e-15));
+            // The bin the shortest step falls in is within the headroom of it, never above it.
+            const double bin = t.seconds(BinTimeline::length(t.bin_for(shortest)));
+            ASSERT_LE(bin, shortest * (1 + 1e-15)) << shortest;
+            ASSERT_GE(bin, headroom * shortest * (1 - 1e-15)) << shortest << " " << headroom;
+        }
+    }
+    // A shortest step on the fixed ladder keeps the fixed ladder (dt_max itself a bin).
+    const BinTimeline fixed = BinTimeline::rebased(dt_max / 8, 0.8, dt_min, dt_max, 0);
+    EXPECT_EQ(fixed.quantum, BinTimeline::for_range(dt_min, dt_max).quantum);
+}
