@@ -62,8 +62,14 @@ struct BinTimeline {
     int bin_for(double dt) const {
         if (!(dt >= quantum)) return 0;
         if (dt >= seconds(length(max_bin))) return max_bin;
-        // floor(log2(dt / q)) from the integer part (exact: dt / q < 2^max_bin + 1 < 2^53)
-        return std::bit_width(std::uint64_t(dt / quantum)) - 1;
+        // floor(log2(dt / q)), exactly, from the binary exponents and mantissas of dt and q
+        // (both positive and normal): 2^(e_dt - e_q) times the ratio of the mantissas, which is
+        // below 1 exactly when dt's mantissa is the smaller.
+        const auto bits = [](double v) { return std::bit_cast<std::uint64_t>(v); };
+        constexpr std::uint64_t kMantissa = (std::uint64_t(1) << 52) - 1;
+        const std::uint64_t d = bits(dt), q = bits(quantum);
+        const int e = int(d >> 52) - int(q >> 52);
+        return e - int((d & kMantissa) < (q & kMantissa));
     }
     /// @brief Whether a step of bin b may start at time n (n is a multiple of 2^b).
     static constexpr bool aligned(std::uint64_t n, int bin) { return (n & (length(bin) - 1)) == 0; }

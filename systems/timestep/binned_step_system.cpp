@@ -90,27 +90,13 @@ void BinnedStepSystem::run(Context& ctx) {
     }
     const std::uint64_t now = tl.now;
     if (!set.empty()) {
-        // 1. Raw bins, with the growth rule (at t = 0 every bin is aligned and any is allowed).
-        const int raw_lo = tbb::parallel_reduce(
-            tbb::blocked_range<std::size_t>(0, set.size(), kGrain), tl.max_bin,
-            [&](const auto& r, int lo) {
-                for (std::size_t k = r.begin(); k < r.end(); ++k) {
-                    const Index i = set[k];
-                    int b = tl.bin_for(dt_raw[i]);
-                    if (now > 0) {
-                        const int old = bin[i];
-                        if (b > old) b = BinTimeline::aligned(now, old + 1) ? old + 1 : old;
-                    }
-                    bin[i] = std::uint8_t(b);
-                    lo = std::min(lo, b);
-                }
-                return lo;
-            },
-            [](int a, int b) { return std::min(a, b); });
-        buckets.bin_lo = std::min(buckets.bin_lo, raw_lo);
-        // Rows that can break the rule: the limiter visits bin_i > lo + 2 (every bin is >= lo);
-        // the wake-up visits bin_i + 2 < hi (every bin is <= hi) and every row the limiter may
-        // lower. The order of either list does not change the result.
+        // 1. Raw bins, with the growth rule (at t = 0 every bin is aligned and any is allowed),
+        // and the rows that can break the rule: the limiter visits bin_i > lo + 2 (every bin is
+        // >= lo); the wake-up visits bin_i + 2 < hi (every bin is <= hi) and every row the
+        // limiter may lower. A row held back by the growth rule keeps a bin >= its old one, so
+        // lo = min(old bound, bin of the shortest raw step) bounds every bin from below. The
+        // order of either list does not change the result.
+        buckets.bin_lo = std::min(buckets.bin_lo, tl.bin_for(s.dt_stable));
         const int lo = buckets.bin_lo, hi = buckets.bin_hi;
         tbb::enumerable_thread_specific<std::vector<Index>> limit_rows, wake_rows;
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, set.size(), kGrain), [&](const auto& r) {
@@ -118,9 +104,15 @@ void BinnedStepSystem::run(Context& ctx) {
             auto& wak = wake_rows.local();
             for (std::size_t k = r.begin(); k < r.end(); ++k) {
                 const Index i = set[k];
-                const bool limited = bin[i] > lo + 2;
+                int b = tl.bin_for(dt_raw[i]);
+                if (now > 0) {
+                    const int old = bin[i];
+                    if (b > old) b = BinTimeline::aligned(now, old + 1) ? old + 1 : old;
+                }
+                bin[i] = std::uint8_t(b);
+                const bool limited = b > lo + 2;
                 if (limited) lim.push_back(i);
-                if (limited || bin[i] + 2 < hi) wak.push_back(i);
+                if (limited || b + 2 < hi) wak.push_back(i);
             }
         });
         m_limit.clear();
@@ -180,19 +172,29 @@ void BinnedStepSystem::run(Context& ctx) {
         // 4. New ends. Active particles: a whole step of their bin from now, filed by bin (at
         // most max_bin + 1 buckets touched, each appended once, in ascending row order). Woken
         // ones: the first multiple of their new bin's step after now (never after their old end).
-        for (auto& v : m_by_bin) v.clear();
-        int final_hi = 0;
-        for (Index i : set) {
-            final_hi = std::max<int>(final_hi, bin[i]);
-            ti_end[i] = now + BinTimeline::length(bin[i]);
-            dt[i] = tl.seconds(BinTimeline::length(bin[i]));
-            m_by_bin[bin[i]].push_back(i);
+        for (Filed& f : m_filed) {
+            for (auto& v : f.by_bin) v.clear();
+            f.hi = 0;
         }
-        buckets.bin_hi = std::max(buckets.bin_hi, final_hi);
-        for (std::size_t b = 0; b < m_by_bin.size(); ++b) {
-            if (m_by_bin[b].empty()) continue;
-            auto& v = buckets.due[now + BinTimeline::length(int(b))];
-            v.insert(v.end(), m_by_bin[b].begin(), m_by_bin[b].end());
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, set.size(), kGrain), [&](const auto& r) {
+            Filed& f = m_filed.local();
+            for (std::size_t k = r.begin(); k < r.end(); ++k) {
+                const Index i = set[k];
+                const int b = bin[i];
+                f.hi = std::max(f.hi, b);
+                ti_end[i] = now + BinTimeline::length(b);
+                dt[i] = tl.seconds(BinTimeline::length(b));
+                f.by_bin[b].push_back(i);
+            }
+        });
+        // Appended in thread order: a bucket is ascending runs, merged when it is taken.
+        for (Filed& f : m_filed) {
+            buckets.bin_hi = std::max(buckets.bin_hi, f.hi);
+            for (std::size_t b = 0; b < f.by_bin.size(); ++b) {
+                if (f.by_bin[b].empty()) continue;
+                auto& v = buckets.due[now + BinTimeline::length(int(b))];
+                v.insert(v.end(), f.by_bin[b].begin(), f.by_bin[b].end());
+            }
         }
         std::vector<Index> cut;
         for (auto& v : woken) cut.insert(cut.end(), v.begin(), v.end());

@@ -20,6 +20,8 @@
 ///    earliest end with a live entry (stale entries of woken particles are dropped there),
 ///    clipped to the run's end and frame times by the engine.
 /// Afterwards, for every active i and every j in i's list, |bin_i - bin_j| <= 2.
+#include <tbb/enumerable_thread_specific.h>
+
 #include <array>
 #include <vector>
 
@@ -46,8 +48,13 @@ public:
     void run(Context& ctx) override;
 
 private:
+    /// One thread's share of a step's active rows, by new bin (kept to reuse the storage).
+    struct Filed {
+        std::array<std::vector<Index>, BinTimeline::kMaxBin + 1> by_bin;
+        int hi = 0;
+    };
     double m_dt_min, m_dt_max, m_headroom;
-    std::array<std::vector<Index>, BinTimeline::kMaxBin + 1> m_by_bin;  ///< this step's active rows by new bin (reused)
+    tbb::enumerable_thread_specific<Filed> m_filed;
     std::vector<Index> m_limit, m_wake;           ///< active rows the limiter / wake-up must visit
 };
 
