@@ -195,7 +195,7 @@ const char* to_string(FrameFormat f);
 struct OutputParams {
     std::vector<FrameFormat> formats{FrameFormat::Vtu};
     /// Particle attributes written per frame, besides position and id (always written): any
-    /// of "position", "velocity", "density", "pressure", "acceleration", "dt", "active".
+    /// of "position", "velocity", "density", "pressure", "acceleration", "dt", "active", "bin".
     std::vector<std::string> attributes{"velocity", "density", "pressure"};
     /// False: the default list above, to which individual stepping adds dt and active.
     bool attributes_explicit = false;

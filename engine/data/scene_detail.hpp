@@ -70,8 +70,8 @@ inline constexpr std::array<MotionType, 4> k_motion_types{MotionType::Linear, Mo
                                                   MotionType::Path, MotionType::Circle};
 inline constexpr std::array<FrameFormat, 3> k_formats{FrameFormat::Vtu, FrameFormat::Bgeo,
                                               FrameFormat::Ply};
-inline constexpr std::array<const char*, 7> k_attributes{"position", "velocity",     "density", "pressure",
-                                                  "acceleration", "dt",       "active"};
+inline constexpr std::array<const char*, 8> k_attributes{"position", "velocity", "density", "pressure",
+                                                  "acceleration", "dt",       "active",  "bin"};
 
 
 // ---- Geometry of the schema (scene.cpp). ----

@@ -145,8 +145,9 @@ FrameArray vec3_array(const std::string& name, std::span<const Vec3> v) {
 }
 
 /// The frame's arrays: position first, then the attributes in the order asked, then id.
-/// `dt` and `active` exist as columns only in individual stepping; in the other modes every
-/// particle took the step just taken (0 before the first step) and was evaluated in it.
+/// `dt` and `active` exist as columns only in individual and binned stepping; in the other modes
+/// every particle took the step just taken (0 before the first step) and was evaluated in it.
+/// `bin` (binned stepping's bin of each particle) is written only where it exists.
 std::vector<FrameArray> gather(const World& world, const std::vector<std::string>& attributes) {
     const auto& store = world.fluid.store;
     const std::size_t n = store.size();
@@ -170,6 +171,10 @@ std::vector<FrameArray> gather(const World& world, const std::vector<std::string
                 const std::vector<std::uint8_t> v(n, world.clock.step > 0 ? 1 : 0);
                 out.push_back(make_array(a, v.data(), n, 1));
             }
+        } else if (a == "bin") {
+            if (!store.has(comp::bin.name)) continue;  // binned stepping only
+            const auto v = store.get(comp::bin);
+            out.push_back(make_array(a, v.data(), n, 1));
         } else if (!store.has(a)) {
             continue;  // e.g. acceleration in a recipe that never stores it
         } else if (store.type_of(a) == typeid(Vec3)) {

@@ -127,8 +127,19 @@ TEST(Vtu, DoubleAndByteColumnsRoundTripByteExact) {
     const auto dir = std::filesystem::temp_directory_path() / "sph_io_test_individual";
     std::filesystem::remove_all(dir);
     const auto file = dir / "frame.vtu";
-    write_vtu(file, w, {"density", "dt", "active"});  // density not registered here: skipped
+    write_vtu(file, w, {"density", "dt", "active", "bin"});  // density, bin not registered: skipped
+    {
+        const VtuArrays none = read_vtu(file);
+        EXPECT_EQ(none.arrays.count("bin"), 0u);
+    }
+    // Binned stepping's bin column: written as UInt8, byte for byte.
+    auto bin = w.fluid.store.add(comp::bin);
+    for (std::size_t i = 0; i < n; ++i) bin[i] = std::uint8_t((i * 11 + 3) % 53);
+    write_vtu(file, w, {"density", "dt", "active", "bin"});
     const VtuArrays a = read_vtu(file);
+    ASSERT_EQ(a.types.at("bin"), "UInt8");
+    ASSERT_EQ(a.arrays.at("bin").size(), n);
+    EXPECT_EQ(std::memcmp(a.arrays.at("bin").data(), bin.data(), n), 0);
     ASSERT_EQ(a.types.at("dt"), "Float64");
     ASSERT_EQ(a.types.at("active"), "UInt8");
     ASSERT_EQ(a.arrays.at("dt").size(), n * sizeof(double));
