@@ -112,7 +112,7 @@ const bool registered = [] {
             ->MinTime(1.0);
     };
     for (const std::string scene : {"peer_dam_break", "dam_break_obstacles"}) {
-        for (const std::string mode : {"global", "individual", "adaptive"})
+        for (const std::string mode : {"global", "individual", "binned", "adaptive"})
             args(benchmark::RegisterBenchmark(("BM_Snapshot_Step/" + scene + "/" + mode).c_str(),
                                               [scene, mode](benchmark::State& s) { snapshot_step(s, scene, mode); }));
         for (const std::string system : {"fluid_grid", "fluid_neighbours", "boundary_neighbours", "density", "forces"})

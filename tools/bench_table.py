@@ -41,17 +41,19 @@ if pairs:
         unit = by_name[a].get("time_unit", "ns")
         print(f"| `{a.replace('/threads:1', '')}` | {t1:.3g} {unit} | {t2:.3g} {unit} | {t1 / t2:.2f}× |")
 
-# Individual stepping (He et al. Alg. 2) by active share, from the same run: one row per system
+# Individual stepping (He et al. Alg. 2) and binned stepping by active share, from the same run: one row per system
 # and particle count, one column per share (BM_Individual_<system>/<N>/<active per mille>), and
 # the cost at 10 % relative to 100 % (1.0 = does not scale with the active set, 0.1 = in proportion).
-shares = {}
-for name, b in by_name.items():
-    m = re.fullmatch(r"BM_Individual_(\w+)/(\d+)/(\d+)", name)
-    if m:
-        shares.setdefault((m.group(1), int(m.group(2))), {})[int(m.group(3))] = b
-if shares:
+for family, label in (("Individual", "individual"), ("Binned", "binned")):
+    shares = {}
+    for name, b in by_name.items():
+        m = re.fullmatch(rf"BM_{family}_(\w+)/(\d+)/(\d+)", name)
+        if m:
+            shares.setdefault((m.group(1), int(m.group(2))), {})[int(m.group(3))] = b
+    if not shares:
+        continue
     cols = sorted({a for row in shares.values() for a in row}, reverse=True)
-    print("\n| individual system | particles | " + " | ".join(f"{a / 10:g} % active" for a in cols) +
+    print(f"\n| {label} system | particles | " + " | ".join(f"{a / 10:g} % active" for a in cols) +
           " | 10 % / 100 % |")
     print("|---|---|" + "---|" * len(cols) + "---|")
     for (system, n), row in sorted(shares.items(), key=lambda kv: (kv[0][1], kv[0][0])):

@@ -104,7 +104,11 @@ TEST(Checkpoint, ResumedRunIsBitIdenticalInEveryMode) {
         auto a = make_simulation(s);
         for (int k = 0; k < 60; ++k) a->step();
         write_checkpoint(file, *a, {{"note", "test"}});
-        for (int k = 0; k < 90; ++k) a->step();
+        std::uint64_t fewest_active = a->world().fluid.size();
+        for (int k = 0; k < 90; ++k) {
+            a->step();
+            fewest_active = std::min(fewest_active, a->world().counter_value("active"));
+        }
 
         auto b = make_simulation(s);
         const Checkpoint ck = read_checkpoint(file);
@@ -117,8 +121,8 @@ TEST(Checkpoint, ResumedRunIsBitIdenticalInEveryMode) {
             << to_string(mode) << ": the resumed run differs from the uninterrupted one";
         if ((mode == SteppingMode::Individual && rule == Activation::Paper) || mode == SteppingMode::Binned) {
             // The case that needs the saved lists (individual) or ends (binned): part of the
-            // fluid was inactive.
-            EXPECT_LT(a->world().counter_value("active"), a->world().fluid.size()) << to_string(mode);
+            // fluid was asleep in the steps after the checkpoint.
+            EXPECT_LT(fewest_active, a->world().fluid.size()) << to_string(mode);
         }
     }
     fs::remove_all(k_dir);

@@ -1,0 +1,148 @@
+// BM_Binned/<system>/<particles>/<active per mille>: the systems of binned stepping
+// (systems/timestep/binned_step_system.hpp) on a jittered lattice where a given, scattered share
+// of the particles is due. The pipeline runs once in recipe order outside the timed loop; each
+// iteration restores the state the measured system changes (the bins, ends, timeline and
+// buckets) with the timer paused, then runs the system once.
+#include <benchmark/benchmark.h>
+
+#include <algorithm>
+#include <string>
+#include <vector>
+
+#include "bench_util.hpp"
+#include "systems/active/binned_select_system.hpp"
+#include "systems/density/density_system.hpp"
+#include "systems/forces/forces_system.hpp"
+#include "systems/integrate/async_integration_system.hpp"
+#include "systems/metrics/step_stats_system.hpp"
+#include "systems/neighbours/fluid_grid_system.hpp"
+#include "systems/neighbours/fluid_neighbours_system.hpp"
+#include "systems/timestep/binned_state.hpp"
+#include "systems/timestep/binned_step_system.hpp"
+
+using namespace sph;
+
+namespace {
+
+struct Pipeline {
+    std::unique_ptr<World> w;
+    std::vector<std::unique_ptr<System>> systems;
+    std::vector<std::uint8_t> bin0;
+    std::vector<std::uint64_t> end0;
+    BinTimeline tl0;
+    DueBuckets buckets0;
+
+    Pipeline(std::size_t n, double share) : w(bench::lattice_world(n)) {
+        const SteppingParams& st = w->scene.simulation.stepping;
+        systems.push_back(std::make_unique<BinnedSelectSystem>(st.dt_min, st.dt_max));
+        systems.push_back(std::make_unique<FluidGridSystem>());
+        systems.push_back(std::make_unique<FluidNeighbourSystem>(true, false));
+        systems.push_back(std::make_unique<DensitySystem>(false, true));
+        systems.push_back(std::make_unique<ForcesSystem>(false, true));
+        systems.push_back(std::make_unique<StepStatsSystem>(true, StepStatsSystem::Rows::Active));
+        systems.push_back(std::make_unique<BinnedStepSystem>(st.dt_min, st.dt_max));
+        systems.push_back(std::make_unique<AsyncIntegrationSystem>());
+        for (auto& s : systems) s->register_components(*w);
+        for (auto& s : systems) run_system(*s, *w);  // t = 0: every particle due
+        // Then a scattered share is due at quantum 4 (bin 2) and the rest at 8 (bin 3), so the
+        // limiter and the wake-up have neighbours on other bins to look at.
+        auto& tl = w->resources.get<BinTimeline>(res::bin_timeline.name);
+        tl = BinTimeline::for_range(st.dt_min, st.dt_max);
+        tl.now = 0;
+        tl.next = 4;
+        auto bin = w->fluid.store.get(comp::bin);
+        auto end = w->fluid.store.get(comp::ti_end);
+        for (std::size_t i = 0; i < bin.size(); ++i) {
+            const bool due = double((i * 2654435761u) % 1000u) < 1000.0 * share;
+            bin[i] = due ? 2 : 3;
+            end[i] = due ? 4 : 8;
+        }
+        w->clock.t_ticks = ticks_of(tl, 4);
+        w->clock.t = to_seconds(w->clock.t_ticks);
+        w->resources.get<DueBuckets>(res::due_buckets.name).layout = ~std::uint64_t(0);  // refile
+        bin0.assign(bin.begin(), bin.end());
+        end0.assign(end.begin(), end.end());
+        tl0 = tl;
+        for (auto& s : systems) run_system(*s, *w);  // the step at quantum 4, every system
+        // The state before that step's binned_select, to restore before each measured run.
+        std::copy(bin0.begin(), bin0.end(), bin.begin());
+        std::copy(end0.begin(), end0.end(), end.begin());
+        tl = tl0;
+        auto& buckets = w->resources.get<DueBuckets>(res::due_buckets.name);
+        buckets.layout = ~std::uint64_t(0);
+        w->clock.t_ticks = ticks_of(tl, 4);
+        run_system(*systems.front(), *w);  // select: the active set and the refiled buckets
+        buckets0 = buckets;
+    }
+    System& get(const std::string& name) {
+        for (auto& s : systems)
+            if (s->name() == name) return *s;
+        throw std::runtime_error("no system " + name);
+    }
+    /// Back to the state after binned_select of the step at quantum 4.
+    void restore(bool before_select) {
+        auto bin = w->fluid.store.get(comp::bin);
+        auto end = w->fluid.store.get(comp::ti_end);
+        std::copy(bin0.begin(), bin0.end(), bin.begin());
+        std::copy(end0.begin(), end0.end(), end.begin());
+        auto& tl = w->resources.get<BinTimeline>(res::bin_timeline.name);
+        tl = tl0;
+        auto& buckets = w->resources.get<DueBuckets>(res::due_buckets.name);
+        buckets = buckets0;
+        if (before_select) {  // the bucket of quantum 4 back in place, the flags cleared
+            tl.next = 4;
+            tl.now = 0;
+        } else {
+            tl.now = 4;
+        }
+    }
+};
+
+void bench_named(benchmark::State& state, const std::string& name) {
+    Pipeline p(std::size_t(state.range(0)), double(state.range(1)) / 1000.0);
+    System& s = p.get(name);
+    const bool select = name == "binned_select";
+    const bool mutates = select || name == "binned_step";
+    std::vector<Index> active = p.w->active_set;
+    for (auto _ : state) {
+        if (mutates) {
+            state.PauseTiming();
+            p.restore(select);
+            if (select) {
+                // Its buckets as before it ran: the due bucket is refiled from the ends.
+                auto& b = p.w->resources.get<DueBuckets>(res::due_buckets.name);
+                b.due[4] = active;
+                p.w->active_set = active;
+                for (Index i : active) p.w->fluid.store.get(comp::active)[i] = 1;
+            }
+            state.ResumeTiming();
+        }
+        run_system(s, *p.w);
+        benchmark::ClobberMemory();
+    }
+    const double n = double(p.w->fluid.size());
+    state.SetItemsProcessed(state.iterations() * std::int64_t(n));
+    state.counters["particles"] = n;
+    state.counters["active_fraction"] = double(active.size()) / n;
+}
+
+void args(benchmark::internal::Benchmark* b) {
+    for (int n : {100'000, 1'000'000})
+        for (int per_mille : {1000, 500, 100, 10}) b->Args({n, per_mille});
+    b->Unit(benchmark::kMillisecond)->UseRealTime();
+}
+
+}  // namespace
+
+#define SPH_BINNED_BENCH(system)                                                          \
+    static void BM_Binned_##system(benchmark::State& state) { bench_named(state, #system); } \
+    BENCHMARK(BM_Binned_##system)->Apply(args)
+
+SPH_BINNED_BENCH(binned_select);
+SPH_BINNED_BENCH(fluid_grid);
+SPH_BINNED_BENCH(fluid_neighbours);
+SPH_BINNED_BENCH(density);
+SPH_BINNED_BENCH(forces);
+SPH_BINNED_BENCH(step_stats);
+SPH_BINNED_BENCH(binned_step);
+SPH_BINNED_BENCH(async_integrate);
