@@ -12,6 +12,7 @@
 #include "systems/methods/recipes.hpp"
 #include "systems/methods/wcsph.hpp"
 #include "systems/timestep/binned_state.hpp"
+#include "scenarios/slab_on_pool.hpp"
 #include "test_scenes.hpp"
 
 using namespace sph;
@@ -226,46 +227,9 @@ TEST(BinnedStepping, WorkCountersAreTheActiveSet) {
 // error below 5 %, a splash height within 15 % of `global`'s; and most of the pool asleep before
 // the impact, so the impact must wake it.
 TEST(BinnedStepping, SlabWakesSleepingPool) {
-    Scene s = test::tank_scene(Vec3d(0.3, 0.12, 0.08), Vec3d(0.3, 0.4, 0.08));
-    s.fluid_blocks[0].hydrostatic = true;
-    s.fluid_blocks.push_back(FluidBlock{Aabb{Vec3d(0.1, 0.27, 0.0), Vec3d(0.2, 0.33, 0.08)}, Vec3d::Zero(), false});
-    const std::uint32_t n_pool = std::uint32_t(lattice_dims(s.fluid_blocks[0].box, 2 * s.fluid.particle_radius).prod());
-    struct Result {
-        double max_err = 0, splash = 0, penetration = 0, pool_active_before = 0;
-    };
-    auto run = [&](SteppingMode mode) {
-        const Scene sc = with_mode(s, mode, false);
-        Recipe recipe = make_wcsph_recipe(sc);
-        // The safety net and what follows it (binned: the wake of the particles it corrected).
-        while (recipe.step.back()->name() != "boundary_collision") recipe.step.pop_back();
-        recipe.step.pop_back();
-        Simulation sim(sc, std::move(recipe));
-        const Aabb box = sc.boundaries[0].box;
-        Result r;
-        int before = 0;
-        sim.run_until(0.45, [&](const Simulation& sm) {
-            const World& w = sm.world();
-            const auto x = w.fluid.store.get(comp::position);
-            const auto id = w.fluid.store.get(comp::id);
-            const double t = sm.time();
-            r.max_err = std::max(r.max_err, w.stats.rho_err_max);
-            for (std::size_t i = 0; i < x.size(); ++i) {
-                for (int a = 0; a < 3; ++a)
-                    r.penetration = std::max({r.penetration, box.min[a] - x[i][a], x[i][a] - box.max[a]});
-                if (t > 0.2 && id[i] < n_pool) r.splash = std::max(r.splash, double(x[i].y()));
-            }
-            if (mode == SteppingMode::Binned && t > 0.10 && t < 0.17) {  // last part of the fall
-                std::size_t pool_active = 0;
-                for (Index i : w.active_set) pool_active += id[i] < n_pool;
-                r.pool_active_before += double(pool_active) / n_pool;
-                ++before;
-            }
-        });
-        if (before) r.pool_active_before /= before;
-        return r;
-    };
-    const Result g = run(SteppingMode::Global);
-    const Result b = run(SteppingMode::Binned);
+    const Scene s = test::slab_on_pool_scene();
+    const test::SlabOnPool g = test::run_slab_on_pool(with_mode(s, SteppingMode::Global, false));
+    const test::SlabOnPool b = test::run_slab_on_pool(with_mode(s, SteppingMode::Binned, false));
     std::printf("global: max density error %.2f %%, splash %.3f m, penetration %.2f mm\n", 100 * g.max_err, g.splash,
                 1e3 * g.penetration);
     std::printf("binned: max density error %.2f %%, splash %.3f m, penetration %.2f mm, pool active before impact "

@@ -10,6 +10,7 @@
 #include "engine/data/components.hpp"
 #include "systems/methods/recipes.hpp"
 #include "systems/methods/wcsph.hpp"
+#include "scenarios/slab_on_pool.hpp"
 #include "test_scenes.hpp"
 
 using namespace sph;
@@ -99,47 +100,10 @@ TEST(IndividualStepping, WorkCountersAreTheActiveSet) {
 // after the impact) within 15 % of `global`'s. The 15 % covers the chaotic break-up of a
 // splash; the measured values are printed.
 TEST(IndividualStepping, SlabWakesSleepingPool) {
-    Scene s = test::tank_scene(Vec3d(0.3, 0.12, 0.08), Vec3d(0.3, 0.4, 0.08));
-    s.fluid_blocks[0].hydrostatic = true;
-    s.fluid_blocks.push_back(FluidBlock{Aabb{Vec3d(0.1, 0.27, 0.0), Vec3d(0.2, 0.33, 0.08)}, Vec3d::Zero(), false});
-    const std::uint32_t n_pool = std::uint32_t(lattice_dims(s.fluid_blocks[0].box, 2 * s.fluid.particle_radius).prod());
-    struct Result {
-        double max_err = 0, splash = 0, penetration = 0, pool_active_before = 0;
-    };
-    auto run = [&](SteppingMode mode, Activation rule) {
-        Scene sc = with_mode(s, mode);
-        sc.simulation.stepping.activation = rule;
-        Recipe recipe = make_wcsph_recipe(sc);
-        EXPECT_EQ(recipe.step.back()->name(), "boundary_collision");
-        recipe.step.pop_back();
-        Simulation sim(sc, std::move(recipe));
-        const Aabb box = sc.boundaries[0].box;
-        Result r;
-        int before = 0;
-        sim.run_until(0.45, [&](const Simulation& sm) {
-            const World& w = sm.world();
-            const auto x = w.fluid.store.get(comp::position);
-            const auto id = w.fluid.store.get(comp::id);
-            const double t = sm.time();
-            r.max_err = std::max(r.max_err, w.stats.rho_err_max);
-            for (std::size_t i = 0; i < x.size(); ++i) {
-                for (int a = 0; a < 3; ++a)
-                    r.penetration = std::max({r.penetration, box.min[a] - x[i][a], x[i][a] - box.max[a]});
-                // The splash: pool particles (the first block: ids below its lattice count)
-                // thrown up after the slab lands (t > 0.2 s).
-                if (t > 0.2 && id[i] < n_pool) r.splash = std::max(r.splash, double(x[i].y()));
-            }
-            if (mode == SteppingMode::Individual && t > 0.10 && t < 0.17) {  // last part of the fall
-                std::size_t pool_active = 0;
-                for (Index i : w.active_set) pool_active += id[i] < n_pool;
-                r.pool_active_before += double(pool_active) / n_pool;
-                ++before;
-            }
-        });
-        if (before) r.pool_active_before /= before;
-        return r;
-    };
-    const Result g = run(SteppingMode::Global, Activation::Deadline);
+    const Scene s = test::slab_on_pool_scene();
+    // The net is the last system of the `individual` recipe (run_slab_on_pool leaves it out).
+    EXPECT_EQ(make_wcsph_recipe(with_mode(s, SteppingMode::Individual)).step.back()->name(), "boundary_collision");
+    const test::SlabOnPool g = test::run_slab_on_pool(with_mode(s, SteppingMode::Global));
     std::printf("global: max density error %.2f %%, splash %.3f m, penetration %.2f mm\n", 100 * g.max_err, g.splash,
                 1e3 * g.penetration);
     // Both activation rules. `paper` leaves most of the pool between evaluations (measured
@@ -148,7 +112,9 @@ TEST(IndividualStepping, SlabWakesSleepingPool) {
     // Delta t_i is under 2 Delta t_sim at every step, so most of a resting pool is active
     // (measured 95 %); it must pass the same checks.
     for (const Activation rule : {Activation::Paper, Activation::Deadline}) {
-        const Result in = run(SteppingMode::Individual, rule);
+        Scene sc = with_mode(s, SteppingMode::Individual);
+        sc.simulation.stepping.activation = rule;
+        const test::SlabOnPool in = test::run_slab_on_pool(sc);
         std::printf("individual (%s): max density error %.2f %%, splash %.3f m, penetration %.2f mm, pool active "
                     "before impact %.1f %%\n",
                     to_string(rule), 100 * in.max_err, in.splash, 1e3 * in.penetration, 100 * in.pool_active_before);
