@@ -207,8 +207,11 @@ TEST(NeighbourSearch, CompactSubsetListsHoldTheSubsetOnly) {
             std::vector<char> in(at.size(), 0);
             for (Index i : subset) in[i] = 1;
             expect_equal_to_brute(grid, at, at, h, true, lists, subset);
-            for (Index i = 0; i < at.size(); ++i)
-                if (!in[i]) ASSERT_EQ(lists.count[i], 0u) << "particle " << i << " is not in the subset";
+            for (Index i = 0; i < at.size(); ++i) {
+                if (!in[i]) {
+                    ASSERT_EQ(lists.count[i], 0u) << "particle " << i << " is not in the subset";
+                }
+            }
             EXPECT_EQ(lists.queried, subset);
         };
         build_neighbour_lists(grid, pts, h, true, QuerySubset{first, false, false}, lists, simd);
