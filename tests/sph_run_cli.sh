@@ -18,7 +18,7 @@ check "no output directory after bad input" '[ ! -e "$tmp/bad" ]'
 check "unknown mode exits 2 (got $rc)" '[ $rc -eq 2 ]'
 check "unknown mode suggests global" 'grep -q "did you mean \"global\"?) (set on the command line)" "$tmp/err2"'
 "$run" "$src/scenes/dam_break.json" --mode adaptive --out "$tmp/bad4" 2>"$tmp/err4"; rc=$?
-check "adaptive with wcsph exits 2 naming the method (got $rc)" '[ $rc -eq 2 ] && grep -q "for method \"wcsph\" (\"adaptive\" is the PCISPH mode" "$tmp/err4"'
+check "adaptive with wcsph exits 2 naming the method (got $rc)" '[ $rc -eq 2 ] && grep -q "for method \"wcsph\" (\"adaptive\" is the PCISPH and DFSPH mode" "$tmp/err4"'
 "$run" "$src/scenes/shock.json" --mode global --out "$tmp/bad5" 2>"$tmp/err5"; rc=$?
 check "global with pcisph exits 2 naming the method (got $rc)" '[ $rc -eq 2 ] && grep -q "expected one of \"constant\", \"adaptive\" for method \"pcisph\"" "$tmp/err5"'
 "$run" "$tmp/does_not_exist.json" 2>"$tmp/err3"; rc=$?

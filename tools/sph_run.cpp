@@ -63,7 +63,7 @@ void check_memory(const sph::Scene& scene, const std::string& file,
 int main(int argc, char** argv) {
     CLI::App app{"sph-run: simulate one SPH scene and write its outputs"};
     app.set_version_flag("--version", std::string("sph-run ") + SPH_VERSION);
-    std::string scene_file, mode, out_dir, graph_file;
+    std::string scene_file, method, mode, out_dir, graph_file;
     double end_time = -1, dt = -1, scale = -1;
     int threads = 0;
     std::vector<std::string> sets;
@@ -71,7 +71,11 @@ int main(int argc, char** argv) {
     std::string inject_nan, resume_file;
     double checkpoint_every = 0;
     app.add_option("scene", scene_file, "Scene file (JSON); not with --resume");
-    app.add_option("--mode", mode, "Stepping mode: constant | global | individual | binned (wcsph); constant | adaptive (pcisph)");
+    app.add_option("--method", method,
+                   "Method: wcsph | pcisph | dfsph (the scene's mode is replaced by the method's default when it "
+                   "belongs to another method)");
+    app.add_option("--mode", mode,
+                   "Stepping mode: constant | global | individual | binned (wcsph); constant | adaptive (pcisph, dfsph)");
     app.add_option("--end", end_time, "Simulated end time in seconds (overrides simulation.end_time)");
     app.add_option("--dt", dt, "Time step in seconds (constant mode; first step of global)");
     app.add_option("--scale", scale, "Particle-count multiplier (overrides simulation.scale)");
@@ -104,6 +108,7 @@ int main(int argc, char** argv) {
     try {
         std::vector<std::pair<std::string, nlohmann::json>> overrides;
         for (const auto& s : sets) overrides.push_back(sph::parse_override(s));
+        if (!method.empty()) overrides.emplace_back("/simulation/method", method);
         if (!mode.empty()) overrides.emplace_back("/simulation/stepping/mode", mode);
         if (end_time >= 0 || app.count("--end")) overrides.emplace_back("/simulation/end_time", end_time);
         if (dt >= 0 || app.count("--dt")) overrides.emplace_back("/simulation/stepping/dt", dt);

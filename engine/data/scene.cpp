@@ -38,6 +38,8 @@ const char* to_string(Method m) {
             return "wcsph";
         case Method::Pcisph:
             return "pcisph";
+        case Method::Dfsph:
+            return "dfsph";
     }
     return "unknown";
 }

@@ -18,9 +18,10 @@
 
 namespace sph {
 
-enum class Method { Wcsph, Pcisph };
-/// `constant` for both methods; `global`, `individual` and `binned` are WCSPH modes; `adaptive`
-/// is the PCISPH mode of Ihmsen et al. 2010 (eq. 16-27). `binned` is per-particle stepping on
+enum class Method { Wcsph, Pcisph, Dfsph };
+/// `constant` for every method; `global`, `individual` and `binned` are WCSPH modes; `adaptive`
+/// is the PCISPH mode of Ihmsen et al. 2010 (eq. 16-27) and DFSPH's CFL step (Bender & Koschier
+/// 2017 eq. 20). `binned` is per-particle stepping on
 /// power-of-two bins with a neighbour limiter and wake-up (engine/core/timeline.hpp,
 /// systems/timestep/binned_step_system.hpp); `individual` is He et al.'s Alg. 2 as published.
 enum class SteppingMode { Constant, Global, Individual, Adaptive, Binned };
@@ -82,6 +83,22 @@ struct PcisphParams {
     std::optional<double> delta_shock;   ///< eq. 25 threshold; default 4 eta, within (eta, eta_max)
 };
 
+/// @brief Divergence-free SPH (Bender & Koschier 2015, 2017): the density solver's target
+/// `eta` (average compression, fraction of rho0) and the divergence solver's `eta_divergence`
+/// (average rate of compression times dt, the same unit), the iteration bounds, warm starts and
+/// the CFL factor of the adaptive step, dt = cfl 2 r / v_max (their eq. 20, d = 2 r).
+struct DfsphParams {
+    double eta = 0.0005;             ///< density solver: stop when avg max(rho*/rho0 - 1, 0) <= eta
+    double eta_divergence = 0.001;   ///< divergence solver: stop when dt avg max(Drho/Dt, 0)/rho0 <= this
+    int min_iterations = 2;          ///< density solver passes at least (Bender & Koschier: 2)
+    int max_iterations = 100;
+    int min_divergence_iterations = 1;
+    int max_divergence_iterations = 100;
+    bool divergence = true;          ///< run the divergence solver
+    bool warm_start = true;          ///< start each solver from half the previous step's stiffness
+    double cfl = 0.4;                ///< adaptive: dt = cfl 2 r / v_max, at most stepping.dt_max
+};
+
 /// @brief Boundary handling of PCISPH (`boundary` section of a scene).
 struct BoundaryParams {
     BoundaryHandling handling = BoundaryHandling::Ihmsen;
@@ -112,7 +129,7 @@ struct FluidParams {
     std::optional<double> speed_of_sound;  ///< m/s; default from density_fluctuation.
     double density_fluctuation = 0.01;     ///< target |rho/rho0 - 1| for the default c_s.
     /// Becker & Teschner 2007 eq. 13 cohesion coefficient kappa (m^3/s^2):
-    /// a_i = -kappa sum_j (m_j/m_i) x_ij W_ij. 0: no surface-tension system (PCISPH only).
+    /// a_i = -kappa sum_j (m_j/m_i) x_ij W_ij. 0: no surface-tension system (PCISPH and DFSPH).
     double surface_tension = 0.0;
     /// Monaghan alpha between fluid and boundary particles (default: `viscosity`); 0 makes every
     /// wall free-slip (it then exerts only its Akinci pressure force, normal to it).
@@ -126,7 +143,8 @@ struct FluidParams {
 struct FluidBlock {
     Aabb box;
     Vec3d velocity{0, 0, 0};  ///< m/s, initial.
-    /// Start at hydrostatic equilibrium: the lattice is compressed along gravity so that the
+    /// Start at hydrostatic equilibrium (WCSPH and PCISPH; DFSPH's equilibrium is the
+    /// uncompressed lattice): the lattice is compressed along gravity so that the
     /// summation density at depth d is the Tait density of pressure rho0 g d. Otherwise the
     /// column starts at rho0 everywhere and rings acoustically (period 4 H / c_s).
     bool hydrostatic = true;
@@ -168,7 +186,7 @@ Vec3d reference_point(const BoundaryDesc& b);
 /// @brief The same boundary moved by `d` metres (its motion is kept).
 BoundaryDesc translated(const BoundaryDesc& b, const Vec3d& d);
 
-/// @brief A disc that emits fluid particles (method "pcisph"): candidates on a square lattice of
+/// @brief A disc that emits fluid particles (methods "pcisph" and "dfsph"): candidates on a square lattice of
 /// spacing 2 r over the disc through `position`, normal to `velocity`. A candidate is inserted
 /// only when no fluid particle and no boundary particle is closer than 0.95 x 2 r, and only
 /// while the emitter's budget (rate x elapsed time) allows: a particle is never placed inside
@@ -226,6 +244,7 @@ struct Scene {
     std::vector<EmitterDesc> emitters;
     OutputParams output;
     PcisphParams pcisph;      ///< method "pcisph" only
+    DfsphParams dfsph;        ///< method "dfsph" only
     BoundaryParams boundary;  ///< method "pcisph" only
     std::vector<ProbeDesc> probes;  ///< measurements written as CSV series (engine/probes.hpp)
 

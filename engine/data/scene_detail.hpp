@@ -20,13 +20,16 @@ using json = nlohmann::json;
 
 // ---- Vocabulary: keys per section (in the order they are listed in messages) and names. ----
 
-inline constexpr std::array<const char*, 12> k_top_keys{"name",  "description",  "simulation", "domain",
+inline constexpr std::array<const char*, 13> k_top_keys{"name",  "description",  "simulation", "domain",
                                                  "fluid", "fluid_blocks", "boundaries", "output",
-                                                 "pcisph", "boundary", "emitters", "probes"};
+                                                 "pcisph", "dfsph", "boundary", "emitters", "probes"};
 inline constexpr std::array<const char*, 7> k_emitter_keys{"position", "velocity", "radius", "rate", "start", "end",
                                                     "max_particles"};
 inline constexpr std::array<const char*, 6> k_pcisph_keys{"iterations", "max_iterations", "loop",
                                                    "eta",        "eta_max",        "delta_shock"};
+inline constexpr std::array<const char*, 9> k_dfsph_keys{
+    "eta", "eta_divergence", "min_iterations", "max_iterations", "min_divergence_iterations",
+    "max_divergence_iterations", "divergence", "warm_start", "cfl"};
 inline constexpr std::array<const char*, 2> k_boundary_params_keys{"handling", "friction"};
 inline constexpr std::array<const char*, 8> k_simulation_keys{
     "method", "stepping", "end_time", "frame_rate", "scale", "gravity", "sort_interval", "simd"};
@@ -54,7 +57,7 @@ inline constexpr std::array<const char*, 2> k_output_keys{"format", "attributes"
 inline constexpr const char* k_name_expected =
     "a non-empty string without \"/\" (it names the output folder)";
 
-inline constexpr std::array<Method, 2> k_methods{Method::Wcsph, Method::Pcisph};
+inline constexpr std::array<Method, 3> k_methods{Method::Wcsph, Method::Pcisph, Method::Dfsph};
 inline constexpr std::array<SteppingMode, 5> k_modes{SteppingMode::Constant, SteppingMode::Global,
                                               SteppingMode::Individual, SteppingMode::Binned,
                                               SteppingMode::Adaptive};

@@ -193,35 +193,37 @@ class Reader {
             }
         }
         if (const json* v = root.find("output")) read_output(root.at(*v, "output"), s.output);
-        const bool pcisph = s.simulation.method == Method::Pcisph;
-        for (const char* key : {"pcisph", "boundary"}) {
-            if (const json* v = root.find(key); v && !pcisph) {
+        const bool wcsph = s.simulation.method == Method::Wcsph;
+        for (const auto& [key, owner] : {std::pair{"pcisph", Method::Pcisph}, std::pair{"boundary", Method::Pcisph},
+                                         std::pair{"dfsph", Method::Dfsph}}) {
+            if (const json* v = root.find(key); v && s.simulation.method != owner) {
                 fail_at(child("", key), dump(*v),
-                        std::string("no \"") + key + "\" section: it belongs to method \"pcisph\", "
-                        "and /simulation/method is \"" + to_string(s.simulation.method) + "\"",
+                        std::string("no \"") + key + "\" section: it belongs to method \"" + to_string(owner) +
+                            "\", and /simulation/method is \"" + to_string(s.simulation.method) + "\"",
                         {child("", key), "/simulation/method"});
             }
         }
         if (const json* v = root.find("emitters")) {
             const Node n = root.at(*v, "emitters");
             require_array(n, "an array of emitters");
-            if (!pcisph && !v->empty())
-                fail_at(n.path, dump(*v), "no emitters: they are implemented for method \"pcisph\"",
+            if (wcsph && !v->empty())
+                fail_at(n.path, dump(*v), "no emitters: they are implemented for methods \"pcisph\" and \"dfsph\"",
                         {n.path, "/simulation/method"});
             for (std::size_t i = 0; i < v->size(); ++i) s.emitters.push_back(read_emitter({(*v)[i], child(n.path, i)}));
         }
         if (const json* v = root.find("pcisph")) read_pcisph(root.at(*v, "pcisph"), s.pcisph);
+        if (const json* v = root.find("dfsph")) read_dfsph(root.at(*v, "dfsph"), s.dfsph);
         if (const json* v = root.find("boundary")) read_boundary_params(root.at(*v, "boundary"), s.boundary);
-        if (s.fluid.surface_tension > 0 && !pcisph) {
+        if (s.fluid.surface_tension > 0 && wcsph) {
             fail_at("/fluid/surface_tension", dump_at("/fluid/surface_tension"),
-                    "0 or no key: surface tension (Becker & Teschner 2007) is implemented for method "
-                    "\"pcisph\" only",
+                    "0 or no key: surface tension (Becker & Teschner 2007) is implemented for methods "
+                    "\"pcisph\" and \"dfsph\" only",
                     {"/fluid/surface_tension", "/simulation/method"});
         }
-        if (s.fluid.pressure_gradient == PressureGradient::Corrected && pcisph) {
+        if (s.fluid.pressure_gradient == PressureGradient::Corrected && !wcsph) {
             fail_at("/fluid/pressure_gradient", dump_at("/fluid/pressure_gradient"),
                     "\"symmetric\" or no key: the corrected pressure gradient is implemented for method "
-                    "\"wcsph\" only (PCISPH has its own pressure force, Ihmsen et al. eq. 6)",
+                    "\"wcsph\" only (PCISPH and DFSPH have their own pressure solvers)",
                     {"/fluid/pressure_gradient", "/simulation/method"});
         }
         if (const json* v = root.find("probes")) s.probes = parse_probes(*v, m_file);  // engine/probes.cpp
@@ -353,21 +355,29 @@ class Reader {
         require_object(n, "an object");
         check_keys(n, k_simulation_keys);
         if (const json* v = n.find("method")) p.method = pick_enum(n.at(*v, "method"), k_methods);
-        if (p.method == Method::Pcisph) p.stepping.mode = SteppingMode::Adaptive;  // its default
+        if (p.method != Method::Wcsph) p.stepping.mode = SteppingMode::Adaptive;  // PCISPH's and DFSPH's default
         if (const json* v = n.find("stepping")) read_stepping(n.at(*v, "stepping"), p.stepping);
         // Modes belong to methods: global/individual are WCSPH's (He et al.), adaptive is
         // PCISPH's (Ihmsen et al. 2010); constant is both.
-        const bool ok = p.stepping.mode == SteppingMode::Constant ||
-                        (p.method == Method::Wcsph) != (p.stepping.mode == SteppingMode::Adaptive);
+        bool ok = p.stepping.mode == SteppingMode::Constant ||
+                  (p.method == Method::Wcsph) != (p.stepping.mode == SteppingMode::Adaptive);
+        // `--set simulation.method=dfsph` on a scene written for another method: the scene's
+        // mode belongs to the method it replaced, so the new method's default mode is taken
+        // (an explicit mode on the command line is still checked).
+        const std::string method_path = child(n.path, "method"), mode_path = child(child(n.path, "stepping"), "mode");
+        if (!ok && from_cli(method_path) && !from_cli(mode_path)) {
+            p.stepping.mode = p.method == Method::Wcsph ? SteppingMode::Global : SteppingMode::Adaptive;
+            ok = true;
+        }
         if (!ok) {
-            const std::string mode_path = child(child(n.path, "stepping"), "mode");
             fail_at(mode_path, dump_at(mode_path),
-                    p.method == Method::Pcisph
-                        ? "one of \"constant\", \"adaptive\" for method \"pcisph\" (\"global\", "
-                          "\"individual\" and \"binned\" are WCSPH modes)"
-                        : "one of \"constant\", \"global\", \"individual\", \"binned\" for method \"wcsph\" "
-                          "(\"adaptive\" is the PCISPH mode: set simulation.method to \"pcisph\")",
-                    {mode_path, child(n.path, "method")});
+                    p.method != Method::Wcsph
+                        ? std::string("one of \"constant\", \"adaptive\" for method \"") + to_string(p.method) +
+                              "\" (\"global\", \"individual\" and \"binned\" are WCSPH modes)"
+                        : std::string("one of \"constant\", \"global\", \"individual\", \"binned\" for method "
+                                      "\"wcsph\" (\"adaptive\" is the PCISPH and DFSPH mode: set "
+                                      "simulation.method to \"pcisph\" or \"dfsph\")"),
+                    {mode_path, method_path});
         }
         read_time(n, "end_time", p.end_time);
         read_number(n, "frame_rate", non_negative("frames per simulated second; 0 writes none"),
@@ -463,6 +473,48 @@ class Reader {
             const std::string mp = child(n.path, "max_iterations");
             fail_at(mp, dump_at(mp), "an integer >= iterations = " + std::to_string(p.iterations),
                     {mp, child(n.path, "iterations")});
+        }
+    }
+
+    void read_dfsph(const Node& n, DfsphParams& p) const {
+        require_object(n, "an object");
+        check_keys(n, k_dfsph_keys);
+        const auto integer = [&](const char* key, int lo, int hi, int& out) {
+            const json* v = n.find(key);
+            if (!v) return;
+            const std::string what = "an integer from " + std::to_string(lo) + " to " + std::to_string(hi);
+            if (!v->is_number_integer()) fail(child(n.path, key), dump(*v), what);
+            const std::int64_t x = v->is_number_unsigned() ? std::int64_t(std::min<std::uint64_t>(
+                                                                  v->get<std::uint64_t>(), INT64_MAX))
+                                                            : v->get<std::int64_t>();
+            if (x < lo || x > hi) fail(child(n.path, key), dump(*v), what);
+            out = int(x);
+        };
+        const auto boolean = [&](const char* key, bool& out) {
+            if (const json* v = n.find(key)) {
+                if (!v->is_boolean()) fail(child(n.path, key), dump(*v), "true or false");
+                out = v->get<bool>();
+            }
+        };
+        read_number(n, "eta", {0.0, false, 0.5, false, "fraction of rest density"}, p.eta);
+        read_number(n, "eta_divergence", {0.0, false, 0.5, false, "fraction of rest density per step"},
+                    p.eta_divergence);
+        integer("min_iterations", 1, 1000, p.min_iterations);
+        integer("max_iterations", 1, 100000, p.max_iterations);
+        integer("min_divergence_iterations", 1, 1000, p.min_divergence_iterations);
+        integer("max_divergence_iterations", 1, 100000, p.max_divergence_iterations);
+        boolean("divergence", p.divergence);
+        boolean("warm_start", p.warm_start);
+        read_number(n, "cfl", {0.0, false, 1.0, true, "CFL factor: dt = cfl 2 r / v_max"}, p.cfl);
+        for (const auto& [lo, hi] : {std::pair{"min_iterations", "max_iterations"},
+                                     std::pair{"min_divergence_iterations", "max_divergence_iterations"}}) {
+            const int a = std::string(lo) == "min_iterations" ? p.min_iterations : p.min_divergence_iterations;
+            const int b = std::string(lo) == "min_iterations" ? p.max_iterations : p.max_divergence_iterations;
+            if (b < a) {
+                const std::string mp = child(n.path, hi);
+                fail_at(mp, dump_at(mp), std::string("an integer >= ") + lo + " = " + std::to_string(a),
+                        {mp, child(n.path, lo)});
+            }
         }
     }
 

@@ -13,6 +13,7 @@
 #include <hwy/highway.h>
 
 #include "engine/core/kernel_simd-inl.hpp"
+#include "systems/forces/viscosity_simd-inl.hpp"
 #include "systems/forces/forces_simd.hpp"
 
 HWY_BEFORE_NAMESPACE();
@@ -21,14 +22,6 @@ namespace HWY_NAMESPACE {
 namespace hn = hwy::HWY_NAMESPACE;
 
 #ifndef SPH_DOUBLE
-/// Monaghan's Pi for approaching pairs (v.x < 0), zero otherwise (monaghan_pi).
-template <class V>
-HWY_INLINE V monaghan(V vx, V r2, V alpha_2hc, V rho_sum, V eps_h2) {
-    const V nu = hn::Div(alpha_2hc, rho_sum);
-    const V pi = hn::Div(hn::Neg(hn::Mul(nu, vx)), hn::Add(r2, eps_h2));
-    return hn::IfThenElseZero(hn::Lt(vx, hn::Zero(hn::DFromV<V>())), pi);
-}
-
 /// a -= coef (x_ij s) per component; returns x_ij s (grad W_ij). Masked lanes must carry a zero
 /// coefficient *and* a zero s: they read row 0, whose values may be anything (a zero gradient
 /// alone would give 0 * inf = NaN; an inactive PCISPH boundary particle has p/rho^2 = NaN).

@@ -1,5 +1,6 @@
 #include "systems/methods/recipes.hpp"
 
+#include "systems/methods/dfsph.hpp"
 #include "systems/methods/pcisph.hpp"
 #include "systems/methods/wcsph.hpp"
 
@@ -11,6 +12,8 @@ Recipe make_recipe(const Scene& scene) {
             return make_wcsph_recipe(scene);
         case Method::Pcisph:
             return make_pcisph_recipe(scene);
+        case Method::Dfsph:
+            return make_dfsph_recipe(scene);
     }
     return make_wcsph_recipe(scene);
 }
