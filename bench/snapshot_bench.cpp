@@ -10,6 +10,9 @@
 //   step). items/s = fluid-particle-steps per second.
 // BM_Snapshot_<system>/<scene>: one system of the `global` recipe on the snapshot (fluid_grid,
 //   fluid_neighbours, boundary_neighbours, density, forces), the systems before it run once.
+// BM_Snapshot_dfsph_<pass>/<scene>: DFSPH's pair passes on its own snapshot (factor: density,
+//   factor, stored gradients and viscosity; pressure and source: one pass of the density solver),
+//   the recipe's systems before the density solve run once.
 #include <benchmark/benchmark.h>
 #include <tbb/global_control.h>
 
@@ -20,6 +23,7 @@
 #include "engine/data/components.hpp"
 #include "engine/graph/system.hpp"
 #include "engine/run/checkpoint.hpp"
+#include "systems/dfsph/dfsph_systems.hpp"
 #include "systems/methods/recipes.hpp"
 
 using namespace sph;
@@ -31,7 +35,8 @@ constexpr double kSnapshotTime = 0.5;
 Scene scene_for(const std::string& scene, const std::string& mode) {
     std::vector<std::pair<std::string, nlohmann::json>> o{{"/simulation/frame_rate", 0}};
     if (mode == "adaptive") o.push_back({"/simulation/method", "pcisph"});
-    o.push_back({"/simulation/stepping/mode", mode});
+    if (mode == "dfsph") o.push_back({"/simulation/method", "dfsph"});
+    o.push_back({"/simulation/stepping/mode", mode == "dfsph" ? std::string("adaptive") : mode});
     return load_scene(SPH_SOURCE_DIR "/scenes/" + scene + ".json", o);
 }
 
@@ -103,6 +108,31 @@ void snapshot_system(benchmark::State& state, const std::string& scene, const st
     set_counters(state, *sim, double(w.fluid.size()));
 }
 
+/// One DFSPH pass on the DFSPH snapshot: the recipe's systems up to the density solve run once,
+/// then `factor` (dfsph_factor) or one `pressure` / `source` pass of the density solver is timed.
+void snapshot_dfsph_pass(benchmark::State& state, const std::string& scene, const std::string& pass) {
+    const bool simd = state.range(0) != 0;
+    tbb::global_control threads(tbb::global_control::max_allowed_parallelism, std::size_t(state.range(1)));
+    auto sim = snapshot(scene, "dfsph", simd);
+    World& w = sim->world();
+    const Scene sc = scene_for(scene, "dfsph");
+    Recipe recipe = make_recipe(sc);
+    for (auto& s : recipe.step) s->register_components(w);
+    System* factor = nullptr;
+    for (auto& s : recipe.step) {
+        if (s->name() == "dfsph_density") break;
+        if (s->name() == "dfsph_factor") factor = s.get();
+        run_system(*s, w);
+    }
+    const bool moving = has_moving_boundaries(sc);
+    DfsphPressureSystem pressure(DfsphSolver::Density, !sc.boundaries.empty());
+    DfsphSourceSystem source(DfsphSolver::Density, !sc.boundaries.empty(), moving, sc.dfsph.relaxation);
+    run_system(source, w);  // a stiffness to apply
+    System* target = pass == "factor" ? factor : pass == "pressure" ? static_cast<System*>(&pressure) : &source;
+    for (auto _ : state) run_system(*target, w);
+    set_counters(state, *sim, double(w.fluid.size()));
+}
+
 const bool registered = [] {
     auto args = [](benchmark::internal::Benchmark* b) {
         b->ArgNames({"simd", "threads"})
@@ -112,12 +142,15 @@ const bool registered = [] {
             ->MinTime(1.0);
     };
     for (const std::string scene : {"peer_dam_break", "dam_break_obstacles"}) {
-        for (const std::string mode : {"global", "individual", "binned", "adaptive"})
+        for (const std::string mode : {"global", "individual", "binned", "adaptive", "dfsph"})
             args(benchmark::RegisterBenchmark(("BM_Snapshot_Step/" + scene + "/" + mode).c_str(),
                                               [scene, mode](benchmark::State& s) { snapshot_step(s, scene, mode); }));
         for (const std::string system : {"fluid_grid", "fluid_neighbours", "boundary_neighbours", "density", "forces"})
             args(benchmark::RegisterBenchmark(("BM_Snapshot_" + system + "/" + scene).c_str(),
                                               [scene, system](benchmark::State& s) { snapshot_system(s, scene, system); }));
+        for (const std::string pass : {"factor", "pressure", "source"})
+            args(benchmark::RegisterBenchmark(("BM_Snapshot_dfsph_" + pass + "/" + scene).c_str(),
+                                              [scene, pass](benchmark::State& s) { snapshot_dfsph_pass(s, scene, pass); }));
     }
     return true;
 }();

@@ -16,7 +16,7 @@ import csv, json, pathlib, sys, importlib.machinery
 d = pathlib.Path(sys.argv[1])
 rows = list(csv.DictReader(open(d / "study.csv")))
 assert [r["configuration"] for r in rows] == ["constant", "global", "individual", "binned", "pcisph/constant",
-                                              "pcisph/adaptive", "ind-0.1"], rows
+                                              "pcisph/adaptive", "dfsph/constant", "dfsph/adaptive", "ind-0.1"], rows
 assert all(r["status"] == "ok" for r in rows)
 def first_dt(run):  # the step of a constant run (its last step may be clipped to the end)
     return float(next(csv.DictReader(open(run / "stats.csv")))["dt"])

@@ -27,9 +27,9 @@ inline constexpr std::array<const char*, 7> k_emitter_keys{"position", "velocity
                                                     "max_particles"};
 inline constexpr std::array<const char*, 6> k_pcisph_keys{"iterations", "max_iterations", "loop",
                                                    "eta",        "eta_max",        "delta_shock"};
-inline constexpr std::array<const char*, 9> k_dfsph_keys{
+inline constexpr std::array<const char*, 10> k_dfsph_keys{
     "eta", "eta_divergence", "min_iterations", "max_iterations", "min_divergence_iterations",
-    "max_divergence_iterations", "divergence", "warm_start", "cfl"};
+    "max_divergence_iterations", "divergence", "warm_start", "relaxation", "cfl"};
 inline constexpr std::array<const char*, 2> k_boundary_params_keys{"handling", "friction"};
 inline constexpr std::array<const char*, 8> k_simulation_keys{
     "method", "stepping", "end_time", "frame_rate", "scale", "gravity", "sort_interval", "simd"};

@@ -183,6 +183,10 @@ class Reader {
             require_array(n, "an array of fluid blocks");
             for (std::size_t i = 0; i < v->size(); ++i) {
                 s.fluid_blocks.push_back(read_block({(*v)[i], child(n.path, i)}));
+                // DFSPH holds rho0 everywhere (Bender & Koschier 2017): its column at rest is the
+                // uncompressed lattice, so its blocks start uncompressed unless a block says so.
+                if (s.simulation.method == Method::Dfsph && (*v)[i].is_object() && !(*v)[i].contains("hydrostatic"))
+                    s.fluid_blocks.back().hydrostatic = false;
             }
         }
         if (const json* v = root.find("boundaries")) {
@@ -193,10 +197,14 @@ class Reader {
             }
         }
         if (const json* v = root.find("output")) read_output(root.at(*v, "output"), s.output);
-        const bool wcsph = s.simulation.method == Method::Wcsph;
+        const bool wcsph = s.simulation.method == Method::Wcsph, pcisph = s.simulation.method == Method::Pcisph;
+        // A section of another method is an error, unless the method was replaced on the command
+        // line (`--method dfsph` on a PCISPH scene): the scene's own method's settings are then
+        // left unread, as its mode is (read_simulation).
+        const bool method_from_cli = from_cli("/simulation/method");
         for (const auto& [key, owner] : {std::pair{"pcisph", Method::Pcisph}, std::pair{"boundary", Method::Pcisph},
                                          std::pair{"dfsph", Method::Dfsph}}) {
-            if (const json* v = root.find(key); v && s.simulation.method != owner) {
+            if (const json* v = root.find(key); v && s.simulation.method != owner && !method_from_cli) {
                 fail_at(child("", key), dump(*v),
                         std::string("no \"") + key + "\" section: it belongs to method \"" + to_string(owner) +
                             "\", and /simulation/method is \"" + to_string(s.simulation.method) + "\"",
@@ -211,9 +219,10 @@ class Reader {
                         {n.path, "/simulation/method"});
             for (std::size_t i = 0; i < v->size(); ++i) s.emitters.push_back(read_emitter({(*v)[i], child(n.path, i)}));
         }
-        if (const json* v = root.find("pcisph")) read_pcisph(root.at(*v, "pcisph"), s.pcisph);
-        if (const json* v = root.find("dfsph")) read_dfsph(root.at(*v, "dfsph"), s.dfsph);
-        if (const json* v = root.find("boundary")) read_boundary_params(root.at(*v, "boundary"), s.boundary);
+        if (const json* v = root.find("pcisph"); v && pcisph) read_pcisph(root.at(*v, "pcisph"), s.pcisph);
+        if (const json* v = root.find("dfsph"); v && s.simulation.method == Method::Dfsph)
+            read_dfsph(root.at(*v, "dfsph"), s.dfsph);
+        if (const json* v = root.find("boundary"); v && pcisph) read_boundary_params(root.at(*v, "boundary"), s.boundary);
         if (s.fluid.surface_tension > 0 && wcsph) {
             fail_at("/fluid/surface_tension", dump_at("/fluid/surface_tension"),
                     "0 or no key: surface tension (Becker & Teschner 2007) is implemented for methods "
@@ -505,6 +514,7 @@ class Reader {
         integer("max_divergence_iterations", 1, 100000, p.max_divergence_iterations);
         boolean("divergence", p.divergence);
         boolean("warm_start", p.warm_start);
+        read_number(n, "relaxation", {0.0, false, 2.0, false, "Jacobi relaxation factor omega"}, p.relaxation);
         read_number(n, "cfl", {0.0, false, 1.0, true, "CFL factor: dt = cfl 2 r / v_max"}, p.cfl);
         for (const auto& [lo, hi] : {std::pair{"min_iterations", "max_iterations"},
                                      std::pair{"min_divergence_iterations", "max_divergence_iterations"}}) {

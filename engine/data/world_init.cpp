@@ -206,9 +206,6 @@ void compress_hydrostatic(const World& w, const Scene& scene, FluidSample& fluid
     const Vec3d up = g > 0 ? Vec3d(-scene.simulation.gravity / g) : Vec3d::UnitY();
     std::vector<Vec3d>& xs = fluid.x;
     const std::vector<std::size_t>& block_of = fluid.block_of;
-    // DFSPH holds rho0 everywhere (Bender & Koschier 2017): its column at rest is the
-    // uncompressed lattice, and a Tait-compressed start would only be pushed back apart.
-    if (scene.simulation.method == Method::Dfsph) return;
     if (g > 0) {
         for (std::size_t bi = 0; bi < scene.fluid_blocks.size(); ++bi) {
             const auto& block = scene.fluid_blocks[bi];

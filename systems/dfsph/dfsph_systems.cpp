@@ -19,6 +19,7 @@
 #include "systems/dfsph/dfsph_simd.hpp"
 #include "systems/forces/forces_kernels.hpp"
 #include "systems/pcisph/pcisph_components.hpp"
+#include "systems/pcisph/pcisph_kernels.hpp"
 
 namespace sph {
 
@@ -32,8 +33,10 @@ ColumnRef<Real> kappa_total(DfsphSolver s) {
     return fluid(s == DfsphSolver::Density ? comp::dfsph_kappa_density : comp::dfsph_kappa_divergence);
 }
 
-/// dt^2 (density) or dt (divergence): the warm-start total is sum k times this.
-double kappa_scale(DfsphSolver s, double dt) { return s == DfsphSolver::Density ? dt * dt : dt; }
+/// The warm-start total is sum k times this: 1 for the density solver (k is then a pressure
+/// over rho0, which a resting column needs whatever dt is), dt for the divergence solver (a
+/// velocity change, which is what its source, a rate, asks for whatever dt is).
+double kappa_scale(DfsphSolver s, double dt) { return s == DfsphSolver::Density ? 1.0 : dt; }
 
 /// The pair-loop arguments of the current context (boundary terms only with boundary particles).
 struct Pairs {
@@ -322,6 +325,8 @@ Access DfsphSourceSystem::access() const {
 
 void DfsphSourceSystem::register_components(World& w) {
     if (m_solver == DfsphSolver::Density) w.fluid.store.add(comp::pressure);
+    w.fluid.store.add(comp::dfsph_kappa);
+    w.fluid.store.add(m_solver == DfsphSolver::Density ? comp::dfsph_kappa_density : comp::dfsph_kappa_divergence);
     w.resources.add<DfsphErrors>(res::dfsph_errors.name, Lifetime::Scratch);
 }
 
@@ -353,7 +358,8 @@ void DfsphSourceSystem::run(Context& ctx) {
     const double dt = ctx.read(res::dt).dt;
     const Real V = p.args.volume, inv_rho0 = Real(1) / ph.rest_density, rho0 = ph.rest_density;
     const Real dt_r = Real(dt), scale = Real(kappa_scale(m_solver, dt)), inv_dt2 = Real(1 / (dt * dt));
-    const Real to_pressure = rho0 / Real(dt * dt);
+    const Real to_pressure = rho0 / scale;  // p = rho0 sum k
+    const Real omega = Real(m_relaxation);
     const std::size_t min_nb = std::size_t(m_min_neighbours);
     const bool simd = ph.simd;
     if (simd) p.args.grads = &ctx.read(res::dfsph_gradients);
@@ -377,15 +383,18 @@ void DfsphSourceSystem::run(Context& ctx) {
                 }
                 // sum_b V_b (v_i - v_b) . grad W_ib = v_i . sum_b V_b grad W_ib - sum_b V_b v_b . grad W_ib
                 if (!grad_b.empty()) div += v[i].dot(grad_b[i]) - (flux_b.empty() ? Real(0) : flux_b[i]);
-                Real err;  // relative to rho0: the compression this pass removes
+                // The signed source, relative to rho0: compression (> 0) or expansion this step;
+                // only compression is corrected (pressure >= 0).
+                Real src;
                 if (density) {
-                    err = std::max(Real(0), rho[i] * inv_rho0 + dt_r * div - Real(1));  // eq. 12
+                    src = rho[i] * inv_rho0 + dt_r * div - Real(1);  // eq. 12
                 } else {
                     const std::size_t nb = p.fluid_nb->count[i] + (boundary_nb ? boundary_nb->count[i] : 0);
-                    err = nb >= min_nb ? std::max(Real(0), div) * dt_r : Real(0);  // eq. 16, times dt
+                    src = nb >= min_nb ? div * dt_r : Real(0);  // eq. 16, times dt
                 }
-                // k = err factor / dt^2 in both cases (divergence: div factor / dt = err factor / dt^2).
-                const Real ki = err * factor[i] * inv_dt2;
+                const Real err = std::max(Real(0), src);  // what the solver's average error counts
+                // k = omega err factor / dt^2 in both cases (divergence: div factor / dt = err factor / dt^2).
+                const Real ki = omega * err * factor[i] * inv_dt2;
                 k[i] = ki;
                 total[i] += ki * scale;
                 if (density) pressure[i] = to_pressure * total[i];
@@ -432,6 +441,35 @@ void DfsphPredictSystem::run(Context& ctx) {
             const Vec3 a = anp.empty() ? g : Vec3(g + anp[i]);
             acc[i] = a;
             v[i] += dt * a;
+        }
+    });
+}
+
+Access DfsphWallContactSystem::access() const {
+    return Access()
+        .read(fluid(comp::position), res::boundary_neighbours, boundary(comp::position), boundary(comp::normal))
+        .write(fluid(comp::velocity))
+        .read_if(m_moving, boundary(comp::velocity));
+}
+
+void DfsphWallContactSystem::run(Context& ctx) {
+    const auto x = ctx.read(fluid(comp::position));
+    auto v = ctx.write(fluid(comp::velocity));
+    const auto xb = ctx.read(boundary(comp::position));
+    const auto nb = ctx.read(boundary(comp::normal));
+    const std::span<const Vec3> vb = m_moving && ctx.has(SetId::Boundary, comp::velocity.name)
+                                         ? ctx.read(boundary(comp::velocity))
+                                         : std::span<const Vec3>{};
+    const NeighbourLists& lists = ctx.read(res::boundary_neighbours);
+    const Real r0 = Real(0.5) * ctx.physics().h;  // Ihmsen sec. 3.2: the rest distance
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 1024), [&](const auto& r) {
+        for (std::size_t i = r.begin(); i < r.end(); ++i) {
+            DirectForcing df{r0};
+            for (Index b : lists.of(Index(i))) df.add(x[i], xb[b], nb[b], vb.empty() ? Vec3::Zero() : vb[b]);
+            if (!df.hit()) continue;
+            const Vec3 n = df.unit_normal(), v_wall = df.v_body / df.sum_w;
+            const Real vn = (v[i] - v_wall).dot(n);
+            if (vn < Real(0)) v[i] -= vn * n;  // eq. 12, normal part, friction 1
         }
     });
 }

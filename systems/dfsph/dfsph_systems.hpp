@@ -4,7 +4,7 @@
 /// flow-graph system with declared reads and writes (systems/methods/dfsph.cpp orders them):
 ///   dfsph_dt -> grid, neighbours -> dfsph_factor -> dfsph_divergence_warm ->
 ///   dfsph_divergence { dfsph_divergence_pressure -> dfsph_divergence_source } x k ->
-///   nonpressure_forces -> dfsph_predict -> dfsph_density_warm ->
+///   nonpressure_forces -> dfsph_predict -> dfsph_wall_contact -> dfsph_density_warm ->
 ///   dfsph_density { dfsph_density_pressure -> dfsph_density_source } x k ->
 ///   dfsph_integrate -> boundary_collision (safety net) -> step_stats.
 /// The paper's divergence solve at the end of step n (after the neighbour search and the
@@ -101,8 +101,11 @@ public:
     /// @param min_neighbours divergence solver: particles with fewer neighbours (fluid and
     /// boundary) take no divergence correction (a free-surface particle's deficient
     /// neighbourhood reads as expansion); Bender's SPlisHSPlasH uses 20 in 3-D.
-    DfsphSourceSystem(DfsphSolver solver, bool boundary, bool moving, int min_neighbours = 20)
-        : m_solver(solver), m_boundary(boundary), m_moving(moving), m_min_neighbours(min_neighbours) {}
+    /// @param relaxation omega of the Jacobi update, k_i = omega src_i factor_i / dt^2 (1: Bender
+    /// & Koschier's; above 1, over-relaxation, docs/methods.md "DFSPH").
+    DfsphSourceSystem(DfsphSolver solver, bool boundary, bool moving, double relaxation = 1.0, int min_neighbours = 20)
+        : m_solver(solver), m_boundary(boundary), m_moving(moving), m_relaxation(relaxation),
+          m_min_neighbours(min_neighbours) {}
     std::string name() const override;
     Access access() const override;
     void register_components(World& w) override;
@@ -111,6 +114,7 @@ public:
 private:
     DfsphSolver m_solver;
     bool m_boundary, m_moving;
+    double m_relaxation;
     int m_min_neighbours;
 };
 
@@ -125,6 +129,23 @@ public:
 
 private:
     bool m_nonpressure;
+};
+
+/// @brief Contact with the walls on the predicted velocities: a particle within r0 = h / 2 of
+/// boundary particles and moving into them (relative to the wall) loses that normal
+/// component, n from Ihmsen et al. 2010 eq. 9-10 (the weighted boundary normals), as eq. 12
+/// does with friction 1 (free slip). Akinci's boundary pressure only acts on compressed
+/// particles, so a drop or a thin sheet (a pour into a glass) would otherwise run into the
+/// wall; here the density solver sees velocities that respect it. No position is moved.
+class DfsphWallContactSystem final : public System {
+public:
+    explicit DfsphWallContactSystem(bool moving) : m_moving(moving) {}
+    std::string name() const override { return "dfsph_wall_contact"; }
+    Access access() const override;
+    void run(Context& ctx) override;
+
+private:
+    bool m_moving;
 };
 
 /// @brief Alg. 1 line 8: x_i += dt v*_i (v*_i, corrected by the density solver, is the new velocity).
