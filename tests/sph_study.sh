@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # sph-study end to end on a tiny Martin & Moyce run (512 particles, 0.06 s): every mode the
-# scene loads with becomes a row (WCSPH constant/global/individual/binned, PCISPH constant/adaptive), the constant row steps at the global run's smallest step,
+# scene loads with becomes a row (WCSPH constant/global/individual/binned, PCISPH and DFSPH constant/adaptive), the constant row steps at the global run's smallest step,
 # the reference run exists and the tables, the Pareto plot and the dt plot are written; the
 # experiment column is filled; the Pareto front of known points is the non-dominated set.
 # usage: sph_study.sh BUILD_TOOLS_DIR SOURCE_DIR
@@ -10,7 +10,7 @@ out=$(mktemp -d); trap 'rm -rf "$out"' EXIT
 cd "$src"
 "$tools/sph-study" scenes/martin_moyce.json --scale 0.296296 --end 0.06 --out "$out/s" \
     --config "individual --set stepping.lambda_v=0.1 --name ind-0.1" > "$out/log" 2>&1 || { cat "$out/log"; exit 1; }
-grep -q "run 1/8" "$out/log"  # the reference and seven configurations
+grep -q "run 1/10" "$out/log"  # the reference and nine configurations
 /usr/bin/python3 - "$out/s" "$tools" <<'PY'
 import csv, json, pathlib, sys, importlib.machinery
 d = pathlib.Path(sys.argv[1])
@@ -30,7 +30,7 @@ for r in rows:
     assert float(r["cpu_s"]) > 0
 assert float(next(r for r in rows if r["configuration"] == "global")["speedup_vs_global"]) == 1.0
 md = (d / "study.md").read_text()
-assert md.count("\n| ") == 8 and "exp. err front" in md and "2 threads" in md, md
+assert md.count("\n| ") == 10 and "exp. err front" in md and "2 threads" in md, md
 for png in ("pareto.png", "dt.png"):
     b = (d / png).read_bytes()
     assert b[:8] == b"\x89PNG\r\n\x1a\n" and len(b) > 10000, png

@@ -4,6 +4,7 @@
 /// coefficients and controller, a source's progress), stored by name with their type. The engine
 /// copies the `Kept` ones generically: into rollback snapshots and into checkpoints (as bytes),
 /// without knowing what they hold. `Scratch` ones are rebuilt every step and never copied.
+#include <concepts>
 #include <cstring>
 #include <map>
 #include <memory>
@@ -39,6 +40,9 @@ public:
     virtual std::string bytes() const = 0;
     /// @brief Replaces the value from bytes(); throws std::runtime_error when they do not fit.
     virtual void load(std::string_view bytes) = 0;
+    /// @brief Heap memory the value holds, for a type that reports it with a
+    /// `std::size_t bytes() const` member (summary.json's memory per particle); else 0.
+    virtual std::size_t memory() const = 0;
 
 private:
     Lifetime m_lifetime;
@@ -52,6 +56,12 @@ public:
     explicit OwnedValue(Lifetime lifetime) : OwnedResource(lifetime) {}
     T value{};
     const std::type_info& type() const override { return typeid(T); }
+    std::size_t memory() const override {
+        if constexpr (requires(const T& t) { { t.bytes() } -> std::convertible_to<std::size_t>; })
+            return value.bytes();
+        else
+            return 0;
+    }
     std::unique_ptr<OwnedResource> clone() const override { return std::make_unique<OwnedValue<T>>(*this); }
     void assign(const OwnedResource& other) override { value = static_cast<const OwnedValue<T>&>(other).value; }
     std::string bytes() const override {

@@ -99,6 +99,9 @@ std::vector<std::pair<std::string, std::size_t>> Simulation::memory_parts() cons
     parts.emplace_back("boundary.grid", w.boundary_grid.bytes());
     parts.emplace_back("fluid.neighbours", w.fluid_neighbours.bytes());
     parts.emplace_back("fluid.boundary_neighbours", w.boundary_neighbours.bytes());
+    // Resources a system owns that report their heap (DFSPH's stored pair gradients).
+    for (const auto& [name, r] : w.resources.items())
+        if (const std::size_t bytes = r->memory()) parts.emplace_back(name, bytes);
     return parts;
 }
 
