@@ -27,6 +27,14 @@ namespace {
 
 constexpr std::size_t kChunk = 256;  // rows per vectorised call (stack buffers)
 
+/// Runs body(range) over [0, n) in ranges of at most kChunk rows: the simple partitioner splits
+/// down to the grain (the default auto partitioner may hand a body a larger range, which would
+/// overrun the bodies' kChunk-row buffers).
+template <class Body>
+void for_chunks(std::size_t n, Body&& body) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, kChunk), body, tbb::simple_partitioner());
+}
+
 const char* solver_name(DfsphSolver s) { return s == DfsphSolver::Density ? "density" : "divergence"; }
 
 ColumnRef<Real> kappa_total(DfsphSolver s) {
@@ -170,7 +178,7 @@ void DfsphFactorSystem::run(Context& ctx) {
         grads = &ctx.write(res::dfsph_gradients);
         grads->shape_like(*p.fluid_nb);
     }
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, p.x.size(), kChunk), [&](const auto& r) {
+    for_chunks(p.x.size(), [&](const auto& r) {
         std::array<Real, kChunk> w{}, wb{}, sq{}, fb{};
         std::array<Real, 3 * kChunk> g{}, gb{};
         if (simd)
@@ -282,7 +290,7 @@ void DfsphPressureSystem::run(Context& ctx) {
     const Real dt = Real(ctx.read(res::dt).dt), V = p.args.volume;
     const bool simd = ctx.physics().simd;
     if (simd) p.args.grads = &ctx.read(res::dfsph_gradients);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, p.x.size(), kChunk), [&](const auto& r) {
+    for_chunks(p.x.size(), [&](const auto& r) {
         std::array<Real, 3 * kChunk> out{};
         if (simd) dfsph_pressure_simd(p.args, k.data(), r.begin(), r.end(), out.data());
         for (std::size_t i = r.begin(); i < r.end(); ++i) {
