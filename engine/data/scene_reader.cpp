@@ -442,20 +442,23 @@ class Reader {
         }
     }
 
+    /// An integer key of `obj` in [lo, hi], if present.
+    void read_integer(const Node& obj, const char* key, int lo, int hi, int& out) const {
+        const json* v = obj.find(key);
+        if (!v) return;
+        const std::string what = "an integer from " + std::to_string(lo) + " to " + std::to_string(hi);
+        if (!v->is_number_integer()) fail(child(obj.path, key), dump(*v), what);
+        const std::int64_t x = v->is_number_unsigned()
+                                   ? std::int64_t(std::min<std::uint64_t>(v->get<std::uint64_t>(), INT64_MAX))
+                                   : v->get<std::int64_t>();
+        if (x < lo || x > hi) fail(child(obj.path, key), dump(*v), what);
+        out = int(x);
+    }
+
     void read_pcisph(const Node& n, PcisphParams& p) const {
         require_object(n, "an object");
         check_keys(n, k_pcisph_keys);
-        const auto integer = [&](const char* key, int lo, int hi, int& out) {
-            const json* v = n.find(key);
-            if (!v) return;
-            const std::string what = "an integer from " + std::to_string(lo) + " to " + std::to_string(hi);
-            if (!v->is_number_integer()) fail(child(n.path, key), dump(*v), what);
-            const std::int64_t x = v->is_number_unsigned() ? std::int64_t(std::min<std::uint64_t>(
-                                                                  v->get<std::uint64_t>(), INT64_MAX))
-                                                            : v->get<std::int64_t>();
-            if (x < lo || x > hi) fail(child(n.path, key), dump(*v), what);
-            out = int(x);
-        };
+        const auto integer = [&](const char* key, int lo, int hi, int& out) { read_integer(n, key, lo, hi, out); };
         integer("iterations", 1, 1000, p.iterations);
         integer("max_iterations", 1, 100000, p.max_iterations);
         if (const json* v = n.find("loop")) p.loop = pick_enum(n.at(*v, "loop"), k_loops);
@@ -488,17 +491,7 @@ class Reader {
     void read_dfsph(const Node& n, DfsphParams& p) const {
         require_object(n, "an object");
         check_keys(n, k_dfsph_keys);
-        const auto integer = [&](const char* key, int lo, int hi, int& out) {
-            const json* v = n.find(key);
-            if (!v) return;
-            const std::string what = "an integer from " + std::to_string(lo) + " to " + std::to_string(hi);
-            if (!v->is_number_integer()) fail(child(n.path, key), dump(*v), what);
-            const std::int64_t x = v->is_number_unsigned() ? std::int64_t(std::min<std::uint64_t>(
-                                                                  v->get<std::uint64_t>(), INT64_MAX))
-                                                            : v->get<std::int64_t>();
-            if (x < lo || x > hi) fail(child(n.path, key), dump(*v), what);
-            out = int(x);
-        };
+        const auto integer = [&](const char* key, int lo, int hi, int& out) { read_integer(n, key, lo, hi, out); };
         const auto boolean = [&](const char* key, bool& out) {
             if (const json* v = n.find(key)) {
                 if (!v->is_boolean()) fail(child(n.path, key), dump(*v), "true or false");

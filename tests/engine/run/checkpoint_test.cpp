@@ -128,46 +128,17 @@ TEST(Checkpoint, ResumedRunIsBitIdenticalInEveryMode) {
     fs::remove_all(k_dir);
 }
 
-// PCISPH `adaptive` with an emitter: the controller's pending step, delta and the emitters'
-// budget are Kept resources, so they are in the checkpoint. Before they were (checkpoint
-// version 1) a resumed `glass` run took another step at once (1.40 ms instead of 0.72 ms at step
-// 98) and emitted 759 particles instead of 756; this test would have failed there.
-TEST(Checkpoint, ResumedPcisphAdaptiveRunWithEmitterIsBitIdentical) {
+namespace {
+/// `glass` filled to 300 particles by its emitter, checkpointed, then 40 steps on, against the
+/// same 40 steps after a restore from the checkpoint: equal state bytes.
+void expect_resumed_pour_bit_identical(Scene s, const std::string& label) {
     const fs::path k_dir = test_dir();
     fs::create_directories(k_dir);
-    Scene s = load_scene(SPH_SOURCE_DIR "/scenes/glass.json");
     s.simulation.frame_rate = 0;
     auto a = make_simulation(s);
     while (a->world().fluid.size() < 300) a->step();  // the emitter has been filling for a while
     const std::int64_t at = a->steps();
-    const fs::path file = k_dir / "pcisph_adaptive.sphckpt";
-    write_checkpoint(file, *a, nlohmann::json::object());
-    for (int k = 0; k < 40; ++k) a->step();
-
-    auto b = make_simulation(s);
-    restore_checkpoint(*b, read_checkpoint(file));
-    ASSERT_EQ(b->steps(), at);
-    for (int k = 0; k < 40; ++k) b->step();
-    EXPECT_EQ(a->world().fluid.size(), b->world().fluid.size());
-    EXPECT_EQ(a->world().step_size.dt_ticks, b->world().step_size.dt_ticks);
-    EXPECT_TRUE(state_bytes(a->world()) == state_bytes(b->world()))
-        << "the resumed PCISPH run differs from the uninterrupted one";
-    fs::remove_all(k_dir);
-}
-
-// DFSPH on `glass` (its method replaced, as `--method dfsph` does): the warm-start totals are
-// Kept columns and the emitter's budget a Kept resource, so a resumed run equals the
-// uninterrupted one bit for bit.
-TEST(Checkpoint, ResumedDfsphRunWithEmitterIsBitIdentical) {
-    const fs::path k_dir = test_dir();
-    fs::create_directories(k_dir);
-    Scene s = load_scene(SPH_SOURCE_DIR "/scenes/glass.json", {{"/simulation/method", "dfsph"}});
-    ASSERT_EQ(s.simulation.stepping.mode, SteppingMode::Adaptive);
-    s.simulation.frame_rate = 0;
-    auto a = make_simulation(s);
-    while (a->world().fluid.size() < 300) a->step();
-    const std::int64_t at = a->steps();
-    const fs::path file = k_dir / "dfsph.sphckpt";
+    const fs::path file = k_dir / (label + ".sphckpt");
     write_checkpoint(file, *a, nlohmann::json::object());
     for (int k = 0; k < 40; ++k) a->step();
 
@@ -177,9 +148,29 @@ TEST(Checkpoint, ResumedDfsphRunWithEmitterIsBitIdentical) {
     for (int k = 0; k < 40; ++k) b->step();
     EXPECT_EQ(a->world().fluid.size(), b->world().fluid.size());
     EXPECT_GT(a->world().fluid.size(), 300u);
+    EXPECT_EQ(a->world().step_size.dt_ticks, b->world().step_size.dt_ticks);
     EXPECT_TRUE(state_bytes(a->world()) == state_bytes(b->world()))
-        << "the resumed DFSPH run differs from the uninterrupted one";
+        << "the resumed " << label << " run differs from the uninterrupted one";
     fs::remove_all(k_dir);
+}
+}  // namespace
+
+// PCISPH `adaptive` with an emitter: the controller's pending step, delta and the emitters'
+// budget are Kept resources, so they are in the checkpoint. Before they were (checkpoint
+// version 1) a resumed `glass` run took another step at once (1.40 ms instead of 0.72 ms at step
+// 98) and emitted 759 particles instead of 756; this test would have failed there.
+TEST(Checkpoint, ResumedPcisphAdaptiveRunWithEmitterIsBitIdentical) {
+    Scene s = load_scene(SPH_SOURCE_DIR "/scenes/glass.json");
+    expect_resumed_pour_bit_identical(s, "pcisph_adaptive");
+}
+
+// DFSPH on `glass` (its method replaced, as `--method dfsph` does): the warm-start totals are
+// Kept columns and the emitter's budget a Kept resource, so a resumed run equals the
+// uninterrupted one bit for bit.
+TEST(Checkpoint, ResumedDfsphRunWithEmitterIsBitIdentical) {
+    Scene s = load_scene(SPH_SOURCE_DIR "/scenes/glass.json", {{"/simulation/method", "dfsph"}});
+    ASSERT_EQ(s.simulation.stepping.mode, SteppingMode::Adaptive);
+    expect_resumed_pour_bit_identical(s, "dfsph");
 }
 
 TEST(Checkpoint, DamagedFilesAreRefusedWithTheReason) {
