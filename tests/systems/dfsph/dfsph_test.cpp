@@ -395,3 +395,69 @@ TEST(DfsphHydrostatic, ColumnRestsAtRhoGDepth) {
     for (std::size_t i = 0; i < x.size(); ++i)
         ASSERT_TRUE(tank.contains(x[i].cast<double>())) << "particle " << i << " at " << x[i].transpose();
 }
+
+// dfsph_wall_contact against a hand-written oracle over every boundary particle (not the lists):
+// a block moving at (-1, -0.5, 0.2) m/s towards the x = 0 wall and the floor; a particle with
+// boundary particles closer than r0 = h/2 gets n = sum_b w_b n_b / |.|, w_b = (r0 - d_b)/r0
+// (Ihmsen et al. 2010 eq. 9-10), and loses v.n when v.n < 0; every other particle keeps its
+// velocity. Tolerance 1e-5 m/s (float sums of a few weights).
+TEST(DfsphWallContact, RemovesOnlyTheVelocityIntoTheWall) {
+    Scene s = dfsph_scene(test::tank_scene(Vec3d(0.12, 0.12, 0.12), Vec3d(0.3, 0.3, 0.3)));
+    auto sim = make_simulation(s);
+    World& w = sim->world();
+    test::jitter(w, 3, Real(0.3));
+    const Vec3 v0(-1.0f, -0.5f, 0.2f);
+    for (auto& v : w.fluid.store.get(comp::velocity)) v = v0;
+    run_system(FluidGridSystem(), w);
+    run_system(FluidNeighbourSystem(), w);
+    run_system(BoundaryNeighbourSystem(), w);
+    run_system(DfsphWallContactSystem(false), w);
+    const auto x = w.fluid.store.get(comp::position);
+    const auto v = w.fluid.store.get(comp::velocity);
+    const auto xb = w.boundary.store.get(comp::position);
+    const auto nb = w.boundary.store.get(comp::normal);
+    const double r0 = 0.5 * double(w.physics.h);
+    double worst = 0;
+    int changed = 0, kept = 0;
+    for (std::size_t i = 0; i < x.size(); ++i) {
+        Eigen::Vector3d n = Eigen::Vector3d::Zero();
+        for (std::size_t b = 0; b < xb.size(); ++b) {
+            const double dist = (d3(x[i]) - d3(xb[b])).norm();
+            if (dist < r0) n += (r0 - dist) / r0 * d3(nb[b]);
+        }
+        Eigen::Vector3d expect = d3(v0);
+        if (n.norm() > 1e-6) {
+            n.normalize();
+            const double vn = expect.dot(n);
+            if (vn < 0) expect -= vn * n;
+        }
+        (expect - d3(v0)).norm() > 1e-9 ? ++changed : ++kept;
+        worst = std::max(worst, (d3(v[i]) - expect).norm());
+    }
+    std::printf("dfsph wall contact: %d particles lose velocity into a wall, %d keep theirs; worst %.2e m/s\n",
+                changed, kept, worst);
+    EXPECT_GT(changed, 20);
+    EXPECT_GT(kept, 100);
+    EXPECT_LT(worst, 1e-5);
+}
+
+// dfsph_dt against eq. 20 written out: dt = min(dt_max, cfl 2 r / (v_max + dt_max |g|)), for a
+// fluid whose fastest particle moves at 3 m/s and for one at rest. Tolerance 1e-6 relative: the
+// spacing and the speeds are floats (1e-7), the step is rounded down to whole ticks (1 ps).
+TEST(DfsphStepSize, CflStepFromTheFastestParticle) {
+    Scene s = dfsph_scene(test::tank_scene(Vec3d(0.1, 0.1, 0.1), Vec3d(0.3, 0.3, 0.3)), SteppingMode::Adaptive);
+    s.dfsph.cfl = 0.5;
+    s.simulation.stepping.dt_max = 4e-3;
+    auto sim = make_simulation(s);
+    World& w = sim->world();
+    DfsphStepSizeSystem dt_system(true, s.dfsph.cfl, s.simulation.stepping.dt_max, s.dfsph.eta, s.dfsph.eta_divergence);
+    auto v = w.fluid.store.get(comp::velocity);
+    const double g = s.simulation.gravity.norm(), d = 2.0 * s.particle_radius();
+    for (const double v_max : {3.0, 0.0}) {
+        for (std::size_t i = 0; i < v.size(); ++i) v[i] = Vec3(Real(v_max * double(i % 7) / 6.0), 0, 0);
+        run_system(dt_system, w);
+        const double expect = std::min(4e-3, 0.5 * d / (v_max + 4e-3 * g));
+        std::printf("dfsph dt: v_max %.1f m/s -> %.6e s (eq. 20: %.6e s)\n", v_max, w.step_size.dt, expect);
+        EXPECT_NEAR(w.step_size.dt, expect, 1e-6 * expect);
+    }
+}
