@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
-# Fuzzes the scene loader with libFuzzer (Debian's clang) for a bounded time:
+# Fuzzes the scene loader, then the checkpoint reader, with libFuzzer (Debian's clang) for a
+# bounded time (SECONDS for the loader, half of it for the checkpoint reader):
 #   bash tools/fuzz.sh [SECONDS] [--merge]
-# Seeds: tests/data/fuzz_corpus (kept in the repository), scenes/ and the malformed corpus.
+# Seeds: tests/data/fuzz_corpus (kept in the repository), scenes/ and the malformed corpus;
+# tests/data/checkpoint_corpus for checkpoints.
 # Any crash, sanitizer report, uncaught non-InputError exception, or an input taking more
 # than 10 s fails (exit non-zero; the reproducer is written to build-fuzz/). --merge folds the
 # new inputs it found, minimised, back into tests/data/fuzz_corpus.
@@ -27,7 +29,18 @@ cd "$out"
 ./scene_fuzzer -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -max_len=4096 \
   -dict=../tests/fuzz/scene.dict -print_final_stats=1 corpus ../scenes ../tests/data/malformed 2>&1 | tail -15
 cd ..
+# The checkpoint reader: the container and the meta keys (engine/run/checkpoint_file.cpp).
+ck_sources=(engine/run/checkpoint_file.cpp engine/core/errors.cpp)
+if [ ! -x "$out/checkpoint_fuzzer" ] ||
+   [ -n "$(find "${ck_sources[@]}" engine/run/checkpoint.hpp tests/fuzz/checkpoint_fuzzer.cpp -newer "$out/checkpoint_fuzzer")" ]; then
+  "$cxx" -std=c++20 -O1 -g -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined \
+    -I. -I/usr/include/eigen3 tests/fuzz/checkpoint_fuzzer.cpp "${ck_sources[@]}" -o "$out/checkpoint_fuzzer"
+fi
+rm -rf "$out/ck_corpus" && mkdir -p "$out/ck_corpus" && cp tests/data/checkpoint_corpus/* "$out/ck_corpus/"
+(cd "$out" && ./checkpoint_fuzzer -max_total_time="$(( (seconds + 1) / 2 ))" -timeout=10 -rss_limit_mb=2048 \
+   -max_len=4096 -print_final_stats=1 ck_corpus 2>&1 | tail -8)
 if [ "${2:-}" = "--merge" ]; then
+  "$out/checkpoint_fuzzer" -merge=1 tests/data/checkpoint_corpus "$out/ck_corpus" 2>&1 | tail -2
   mkdir -p tests/data/fuzz_corpus
   "$out/scene_fuzzer" -merge=1 tests/data/fuzz_corpus "$out/corpus" 2>&1 | tail -2
 fi

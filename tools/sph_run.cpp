@@ -1,8 +1,12 @@
-// sph-run: runs one scene and writes stats.csv, summary.json and VTU frames.
-// Exit codes: 0 ok, 2 bad input, 3 simulation failed.
+// sph-run: runs one scene and writes stats.csv, summary.json and frames.
+// Exit codes: 0 ok, 2 bad input, 3 simulation failed, 5 an output could not be written,
+// 128 + signal when stopped by SIGINT/SIGTERM (after writing the summary).
+#include <signal.h>
+#include <csignal>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <optional>
@@ -17,10 +21,60 @@
 #include "engine/core/errors.hpp"
 #include "engine/run/io.hpp"
 #include "engine/run/recorder.hpp"
+#include "engine/run/run_folder.hpp"
 #include "systems/debug/nan_injection_system.hpp"
 #include "systems/methods/recipes.hpp"
 
 namespace {
+
+/// The first SIGINT/SIGTERM: the run stops at the end of the step in progress and writes its
+/// summary (and a checkpoint when checkpointing). The handler resets both signals to their
+/// default action, so a second signal (either) stops the program at once.
+std::atomic<int> g_stop_signal{0};  // lock-free: safe in a handler
+static_assert(std::atomic<int>::is_always_lock_free);
+extern "C" void on_stop_signal(int sig) {
+    struct sigaction dfl {};  // sigaction and raise are async-signal-safe
+    dfl.sa_handler = SIG_DFL;
+    sigemptyset(&dfl.sa_mask);
+    int none = 0;
+    if (!g_stop_signal.compare_exchange_strong(none, sig)) {
+        // A second signal (perhaps handled at the same moment on another thread): stop at once.
+        sigaction(sig, &dfl, nullptr);
+        raise(sig);  // delivered when this handler returns, with the default action
+        return;
+    }
+    sigaction(SIGINT, &dfl, nullptr);
+    sigaction(SIGTERM, &dfl, nullptr);
+}
+void install_stop_handlers() {
+    struct sigaction sa {};
+    sa.sa_handler = on_stop_signal;
+    sigemptyset(&sa.sa_mask);  // the other stop signal waits until the handler has reset both
+    sigaddset(&sa.sa_mask, SIGINT);
+    sigaddset(&sa.sa_mask, SIGTERM);
+    sa.sa_flags = 0;
+    for (const int sig : {SIGINT, SIGTERM}) {
+        struct sigaction old {};
+        // A signal the parent ignores stays ignored (a background job of a script ignores SIGINT).
+        if (sigaction(sig, nullptr, &old) == 0 && old.sa_handler == SIG_IGN) continue;
+        sigaction(sig, &sa, nullptr);
+    }
+}
+
+constexpr const char* kHelpFooter = R"(
+Outputs (in --out, default out/<scene name>):
+  run.json                  the run that owns the folder (id, scene, pid); .sph-run.lock while it runs
+  stats.csv                 one row per step; summary.json at the end (also when stopped early)
+  frames/frame_NNNNN.EXT    particle frames, EXT per output.format (vtu, bgeo, ply); --no-frames for none
+  probes/<name>.csv         the scene's probes; checkpoints/ with --checkpoint-every
+  A fresh run replaces the outputs of an earlier run in its folder; outputs no run.json claims
+  are replaced only with --force.
+Exit codes:
+  0 done   2 bad input (scene, option, checkpoint, folder)   3 the simulation failed
+  5 an output could not be written (disk full, read-only, path too long)
+  130 / 143 stopped by SIGINT / SIGTERM after the step in progress (summary.json says "interrupted";
+  a second signal stops at once)
+)";
 
 std::string format_seconds(double s) {
     char buf[32];
@@ -68,8 +122,9 @@ int main(int argc, char** argv) {
     int threads = 0;
     std::vector<std::string> sets;
     bool quiet = false, no_frames = false, list_modes = false;
-    std::string inject_nan, resume_file;
-    double checkpoint_every = 0;
+    std::string inject_nan, resume_file, formats;
+    double checkpoint_every = 0, frame_rate = -1;
+    bool force = false;
     app.add_option("scene", scene_file, "Scene file (JSON); not with --resume");
     app.add_option("--method", method,
                    "Method: wcsph | pcisph | dfsph (the scene's mode is replaced by the method's default when it "
@@ -82,8 +137,13 @@ int main(int argc, char** argv) {
     app.add_option("--out", out_dir, "Output directory (default out/<scene name>)");
     app.add_option("--threads", threads, "Worker threads (default: all cores)");
     app.add_option("--graph", graph_file, "Write the system graph as Graphviz dot to this file");
-    app.add_option("--set", sets, "Override a scene value: --set simulation.stepping.lambda_v=0.1 (repeatable)");
+    app.add_option("--set", sets, "Override a scene value: --set simulation.stepping.lambda_v=0.1 (one per --set; repeatable)")
+        ->allow_extra_args(false);
     app.add_flag("--no-frames", no_frames, "Write no particle frames");
+    app.add_option("--frame-rate", frame_rate, "Frames per simulated second (overrides simulation.frame_rate; 0: none)");
+    app.add_option("--format", formats, "Frame formats, comma-separated: vtu,bgeo,ply (overrides output.format)");
+    app.add_flag("--force", force, "Replace outputs in --out that no sph-run run claims (or another run's, resuming)");
+    app.footer(kHelpFooter);
     app.add_option("--checkpoint-every", checkpoint_every,
                    "Write a checkpoint every T simulated seconds to <out>/checkpoints/checkpoint_NNNNNN.sphckpt");
     app.add_option("--resume", resume_file,
@@ -103,6 +163,7 @@ int main(int argc, char** argv) {
     }
     if (quiet) spdlog::set_level(spdlog::level::warn);
 
+    std::unique_ptr<sph::RunFolder> folder;  // declared first: released last
     std::unique_ptr<sph::Simulation> sim;
     std::unique_ptr<sph::Recorder> recorder;
     try {
@@ -113,7 +174,18 @@ int main(int argc, char** argv) {
         if (end_time >= 0 || app.count("--end")) overrides.emplace_back("/simulation/end_time", end_time);
         if (dt >= 0 || app.count("--dt")) overrides.emplace_back("/simulation/stepping/dt", dt);
         if (scale >= 0 || app.count("--scale")) overrides.emplace_back("/simulation/scale", scale);
+        if (app.count("--frame-rate")) overrides.emplace_back("/simulation/frame_rate", frame_rate);
         if (no_frames) overrides.emplace_back("/simulation/frame_rate", 0.0);
+        if (app.count("--format")) {
+            nlohmann::json list = nlohmann::json::array();
+            std::size_t start = 0;
+            while (start <= formats.size()) {
+                const std::size_t comma = std::min(formats.find(',', start), formats.size());
+                list.push_back(formats.substr(start, comma - start));
+                start = comma + 1;
+            }
+            overrides.emplace_back("/output/format", list);
+        }
         if (threads < 0) throw sph::InputError("--threads: found " + std::to_string(threads) + ", expected a count >= 0");
         if (app.count("--checkpoint-every") && !(checkpoint_every > 0 && std::isfinite(checkpoint_every)))
             throw sph::InputError("--checkpoint-every: found " + std::to_string(checkpoint_every) +
@@ -128,9 +200,8 @@ int main(int argc, char** argv) {
                 throw sph::InputError("--resume: found a scene file or scene options, expected none (a resumed run "
                                       "continues with the checkpoint's scene and settings)");
             checkpoint = sph::read_checkpoint(resume_file);
+            sph::check_run_meta(*checkpoint);
             const auto& m = checkpoint->meta;
-            if (!m.contains("scene_text") || !m.contains("scene_file") || !m.contains("overrides"))
-                throw sph::CheckpointError(resume_file + ": has no scene (written by a program other than sph-run)");
             scene_file = m["scene_file"].get<std::string>();
             scene_text = m["scene_text"].get<std::string>();
             for (const auto& o : m["overrides"]) overrides.emplace_back(o[0].get<std::string>(), o[1]);
@@ -163,6 +234,14 @@ int main(int argc, char** argv) {
         sph::Scene scene = sph::parse_scene(scene_text, scene_file, overrides);
         scene.source = scene_file;
         check_memory(scene, scene_file, overrides);
+        // The output folder is claimed before the (possibly long) set-up: a folder in use, a file
+        // in its place or a path the file system refuses stops the run before any sampling.
+        const std::filesystem::path out =
+            out_dir.empty() ? std::filesystem::path("out") / scene.name : std::filesystem::path(out_dir);
+        const std::string run_id =
+            checkpoint ? checkpoint->meta.value("run_id", std::string()) : sph::new_run_id();
+        folder = std::make_unique<sph::RunFolder>(out, run_id, scene.name, checkpoint.has_value(), force);
+        if (!folder->note().empty()) spdlog::info("{}", folder->note());
         const int nthreads = threads > 0 ? threads : tbb::info::default_concurrency();
         tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(nthreads));
 
@@ -190,13 +269,18 @@ int main(int argc, char** argv) {
             sph::write_file_atomic(graph_file, sim->graph().dot());
             spdlog::info("system graph written to {}", graph_file);
         }
-        const std::filesystem::path out = out_dir.empty() ? std::filesystem::path("out") / scene.name : std::filesystem::path(out_dir);
         if (checkpoint) {
-            recorder = std::make_unique<sph::Recorder>(out, *sim, checkpoint->meta.at("recorder"));
+            try {
+                recorder = std::make_unique<sph::Recorder>(out, *sim, checkpoint->meta.at("recorder"));
+            } catch (const nlohmann::json::exception& e) {
+                throw sph::CheckpointError(resume_file + ": meta key 'recorder' is not what sph-run writes (" +
+                                           e.what() + ")");
+            }
         } else {
             recorder = std::make_unique<sph::Recorder>(out, *sim);
             recorder->begin(*sim);
         }
+        folder->keep();
         // Checkpoints at multiples of T simulated seconds (after the step that reaches one).
         nlohmann::json overrides_json = nlohmann::json::array();
         for (const auto& [path, value] : overrides) overrides_json.push_back({path, value});
@@ -207,6 +291,7 @@ int main(int argc, char** argv) {
                                    {"scene_text", scene_text},
                                    {"overrides", overrides_json},
                                    {"out", out.string()},
+                                   {"run_id", folder->run_id()},
                                    {"checkpoint_every", checkpoint_every},
                                    {"step", s.steps()},
                                    {"t", s.time()},
@@ -221,8 +306,13 @@ int main(int argc, char** argv) {
         const auto t0 = std::chrono::steady_clock::now();
         auto last_report = t0;
         const double end = scene.simulation.end_time;
-        sim->run_until(end, [&](const sph::Simulation& s) {
+        install_stop_handlers();
+        const bool reached_end = sim->run_until(end, [&](const sph::Simulation& s) {
             recorder->after_step(s);
+            if (g_stop_signal.load()) {
+                sim->request_stop();
+                return;
+            }
             if (checkpoint_every > 0 && s.time() >= next_checkpoint - 1e-9 && s.time() < end - 1e-9) {
                 write_checkpoint(s);
                 next_checkpoint = (std::floor(s.time() / checkpoint_every + 1e-9) + 1) * checkpoint_every;
@@ -244,7 +334,26 @@ int main(int argc, char** argv) {
         });
         if (tty) std::fprintf(stderr, "\n");
         const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        const int stop_signal = reached_end ? 0 : g_stop_signal.load();
+        std::string resume_hint;
+        if (stop_signal) {
+            const char* name = stop_signal == SIGINT ? "SIGINT" : stop_signal == SIGTERM ? "SIGTERM" : "a signal";
+            recorder->set_interrupted(name);
+            if (checkpoint_every > 0) {
+                write_checkpoint(*sim);
+                char file[48];
+                std::snprintf(file, sizeof file, "checkpoint_%06lld.sphckpt", static_cast<long long>(sim->steps()));
+                resume_hint = "; continue with: sph-run --resume " + (out / "checkpoints" / file).string();
+            }
+        }
         const auto summary = recorder->finish(*sim, wall, nthreads);
+        if (stop_signal) {
+            std::fprintf(stderr, "sph-run: stopped by %s at t = %.6g s (step %lld of the run to %g s); summary.json "
+                                 "is marked \"interrupted\"%s\n",
+                         stop_signal == SIGINT ? "SIGINT" : "SIGTERM", sim->time(), static_cast<long long>(sim->steps()),
+                         end, resume_hint.c_str());
+            return 128 + stop_signal;
+        }
         spdlog::info("done: {} steps to t = {:.4f} s in {:.2f} s wall, {:.3g} fluid-particle-steps/s, "
                      "{:.0f} bytes per fluid particle (columns, grids, lists), peak RSS {:.1f} MiB",
                      sim->steps(), sim->time(), wall, summary["fluid_particle_steps_per_s"].get<double>(),
@@ -253,7 +362,10 @@ int main(int argc, char** argv) {
         for (const auto& s : summary["systems"])
             spdlog::info("  {:<22} {:8.3f} s  {:5.1f} %", s["name"].get<std::string>(), s["seconds"].get<double>(),
                          100.0 * s["share"].get<double>());
-        spdlog::info("outputs in {}", out.string());
+        std::string fmts;
+        for (const auto f : scene.output.formats) fmts += std::string(fmts.empty() ? "" : ", ") + sph::to_string(f);
+        spdlog::info("wrote {} frame(s) ({}) to {}, stats.csv and summary.json to {}", recorder->frames_written(),
+                     recorder->frames_written() ? fmts : "none", (out / "frames").string(), out.string());
         return 0;
     } catch (const sph::InputError& e) {
         std::fprintf(stderr, "sph-run: error: %s\n", e.what());
@@ -267,6 +379,12 @@ int main(int argc, char** argv) {
             }
         }
         return 3;
+    } catch (const sph::OutputError& e) {
+        std::fprintf(stderr, "\nsph-run: cannot write an output: %s\n", e.what());
+        return 5;
+    } catch (const std::filesystem::filesystem_error& e) {
+        std::fprintf(stderr, "\nsph-run: cannot write an output: %s\n", e.what());
+        return 5;
     } catch (const std::exception& e) {
         std::fprintf(stderr, "sph-run: internal error: %s\n", e.what());
         return 4;

@@ -1,6 +1,7 @@
 #pragma once
 /// @file errors.hpp
-/// @brief Typed errors: bad input (exit 2) versus a failed simulation (exit 3).
+/// @brief Typed errors: bad input (exit 2), a failed simulation (exit 3), an output the
+/// environment would not take (exit 5).
 #include <cstdint>
 #include <stdexcept>
 #include <string>
@@ -23,6 +24,14 @@ public:
 
 private:
     std::string m_file, m_path;
+};
+
+/// @brief Writing an output failed for a reason outside the scene: the disk is full, a folder
+/// is read-only, a path is too long for the file system. Exit code 5. The message names the
+/// path and the operating system's reason.
+class OutputError : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
 };
 
 /// @brief The simulation itself failed (NaN, particle outside the domain, step collapse).

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <unordered_set>
 
 #include "engine/core/errors.hpp"
 
@@ -171,8 +172,11 @@ public:
         d.rate = number(p, path, "rate", 0, false, "a number > 0 (samples per simulated second)", 100.0);
         d.name = type + "_" + std::to_string(index);
         if (const auto n = p.find("name"); n != p.end()) {
-            const char* what = "a non-empty name of letters, digits, '_', '-' or '.' (it names probes/<name>.csv)";
-            if (!n->is_string() || n->get<std::string>().empty()) fail(path + "/name", *n, what);
+            const char* what =
+                "a non-empty name of at most 251 letters, digits, '_', '-' or '.' (it names probes/<name>.csv, and a "
+                "file name holds at most 255 bytes)";
+            if (!n->is_string() || n->get<std::string>().empty() || n->get<std::string>().size() > 251)
+                fail(path + "/name", *n, what);
             for (const char c : n->get<std::string>())
                 if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '.'))
                     fail(path + "/name", *n, what);
@@ -192,12 +196,12 @@ std::vector<ProbeDesc> parse_probes(const json& value, const std::string& file, 
     ProbeReader r(file);
     if (!value.is_array()) r.fail(path, value, "an array of probes");
     std::vector<ProbeDesc> out;
+    std::unordered_set<std::string> names;  // one lookup a probe: linear in the probe count
     for (std::size_t i = 0; i < value.size(); ++i) {
         out.push_back(r.probe(value[i], path + "/" + std::to_string(i), i));
-        for (std::size_t j = 0; j + 1 < out.size(); ++j)
-            if (out[j].name == out.back().name)
-                r.fail(path + "/" + std::to_string(i) + "/name", json(out.back().name),
-                       "a name no other probe has (it names probes/<name>.csv)");
+        if (!names.insert(out.back().name).second)
+            r.fail(path + "/" + std::to_string(i) + "/name", json(out.back().name),
+                   "a name no other probe has (it names probes/<name>.csv)");
     }
     return out;
 }

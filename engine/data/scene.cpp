@@ -213,6 +213,20 @@ std::string read_scene_file(const std::filesystem::path& file) {
         return InputError(name + ": cannot open scene file (" +
                           std::error_code(err, std::generic_category()).message() + ")");
     };
+    // Only a regular file of bounded size: a FIFO would block and /dev/zero never end.
+    std::error_code ec;
+    const auto st = std::filesystem::status(file, ec);
+    if (!ec && std::filesystem::exists(st)) {
+        if (std::filesystem::is_directory(st))
+            throw InputError(name + ": cannot open scene file (it is a folder, expected a JSON file)");
+        if (!std::filesystem::is_regular_file(st))
+            throw InputError(name + ": cannot open scene file (it is a device, pipe or socket, expected a JSON file)");
+        const auto size = std::filesystem::file_size(file, ec);
+        constexpr std::uintmax_t kMax = std::uintmax_t(64) << 20;
+        if (!ec && size > kMax)
+            throw InputError(name + ": the scene file holds " + std::to_string(size) + " bytes, more than the " +
+                             std::to_string(kMax) + " a scene may have (meshes belong in their own files)");
+    }
     errno = 0;
     const std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(std::fopen(name.c_str(), "rb"),
                                                             &std::fclose);

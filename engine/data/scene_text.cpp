@@ -161,6 +161,8 @@ std::string suggestion(std::string_view found, std::span<const char* const> name
 /// Builds the document like nlohmann's DOM parser but knows the JSON path of the value being
 /// read, so duplicate keys (which nlohmann silently overwrites) and numbers that overflow a
 /// double are reported at their path.
+constexpr std::size_t kMaxSceneDepth = 64;  ///< objects and arrays nested in a scene (the schema needs 6)
+
 class DomBuilder final : public json::json_sax_t {
   public:
     explicit DomBuilder(json& root) : m_root(root) {}
@@ -198,6 +200,7 @@ class DomBuilder final : public json::json_sax_t {
     }
 
     std::optional<std::string> duplicate_key;
+    bool too_deep = false;
     std::string error_path;
     std::size_t error_position = 0;
     int error_id = 0;
@@ -237,6 +240,11 @@ class DomBuilder final : public json::json_sax_t {
     }
 
     bool open(json v) {
+        if (m_stack.size() >= kMaxSceneDepth) {  // each level holds its path: memory grows as depth^2
+            too_deep = true;
+            error_path = value_path();
+            return false;
+        }
         std::string path = value_path();
         json* p = place(std::move(v));
         m_stack.push_back({p, std::move(path)});
@@ -375,6 +383,10 @@ json parse_document(const std::string& text, const std::string& file) {
         throw SceneError(file, builder.error_path,
                          "duplicate key " + in_quotes(*builder.duplicate_key),
                          "each key at most once per object");
+    }
+    if (builder.too_deep) {
+        throw SceneError(file, shown(builder.error_path).substr(0, 200), "objects or arrays nested more than 64 deep",
+                         "a scene nests at most 64 levels (its schema needs 6)");
     }
     if (builder.error_id == 406) {  // out_of_range.406: the number overflows a double
         throw SceneError(file, shown(builder.error_path), truncate(builder.error_token),

@@ -14,8 +14,6 @@ namespace sph {
 
 namespace {
 
-constexpr char kMagic[8] = {'S', 'P', 'H', 'C', 'K', 'P', 'T', '\0'};
-constexpr std::size_t kHeaderBytes = 8 + 4 + 4 + 8 + 8;
 
 
 template <class T>
@@ -197,15 +195,6 @@ void restore_step(World& w, const std::string& text, const std::filesystem::path
 
 }  // namespace
 
-std::uint64_t fnv1a64(std::string_view bytes) {
-    std::uint64_t h = 14695981039346656037ull;
-    for (const char c : bytes) {
-        h ^= std::uint8_t(c);
-        h *= 1099511628211ull;
-    }
-    return h;
-}
-
 void write_checkpoint(const std::filesystem::path& file, const Simulation& sim, const nlohmann::json& meta) {
     const World& w = sim.world();
     std::map<std::string, std::string> sections;
@@ -238,7 +227,7 @@ void write_checkpoint(const std::filesystem::path& file, const Simulation& sim, 
         put(payload, std::uint64_t(data.size()));
         payload += data;
     }
-    std::string out(kMagic, sizeof kMagic);
+    std::string out(kCheckpointMagic, sizeof kCheckpointMagic);
     put(out, kCheckpointVersion);
     put(out, std::uint32_t(sizeof(Real)));
     put(out, std::uint64_t(payload.size()));
@@ -247,68 +236,6 @@ void write_checkpoint(const std::filesystem::path& file, const Simulation& sim, 
     f.write(out);
     f.write(payload);
     f.commit();
-}
-
-Checkpoint read_checkpoint(const std::filesystem::path& file) {
-    const std::string name = file.string();
-    std::ifstream in(file, std::ios::binary);
-    if (!in) throw CheckpointError(name + ": cannot open checkpoint file (" + std::strerror(errno) + ")");
-    std::string all((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    if (all.size() < kHeaderBytes || std::memcmp(all.data(), kMagic, sizeof kMagic) != 0)
-        throw CheckpointError(name + ": not an sph checkpoint (expected the magic \"SPHCKPT\" at the start)");
-    std::uint32_t version, real_bytes;
-    std::uint64_t length, checksum;
-    std::memcpy(&version, all.data() + 8, 4);
-    std::memcpy(&real_bytes, all.data() + 12, 4);
-    std::memcpy(&length, all.data() + 16, 8);
-    std::memcpy(&checksum, all.data() + 24, 8);
-    if (version != kCheckpointVersion)
-        throw CheckpointError(name + ": checkpoint format version " + std::to_string(version) +
-                              ", expected version " + std::to_string(kCheckpointVersion) +
-                              " (written by another version of sph)");
-    if (real_bytes != sizeof(Real))
-        throw CheckpointError(name + ": written with " + std::to_string(real_bytes) +
-                              "-byte particle fields, this build uses " + std::to_string(sizeof(Real)) +
-                              " (SPH_DOUBLE differs)");
-    if (all.size() - kHeaderBytes != length)
-        throw CheckpointError(name + ": holds " + std::to_string(all.size() - kHeaderBytes) +
-                              " payload bytes, the header says " + std::to_string(length) + " (truncated?)");
-    const std::string_view payload = std::string_view(all).substr(kHeaderBytes);
-    const std::uint64_t actual = fnv1a64(payload);
-    if (actual != checksum) {
-        char buf[96];
-        std::snprintf(buf, sizeof buf, "checksum mismatch (stored %016llx, computed %016llx): the file is corrupt",
-                      static_cast<unsigned long long>(checksum), static_cast<unsigned long long>(actual));
-        throw CheckpointError(name + ": " + buf);
-    }
-    Checkpoint ck;
-    ck.file = file;
-    std::size_t pos = 0;
-    auto take = [&](std::size_t n) {
-        // n comes from the file: compare without pos + n, which a crafted length wraps round.
-        if (n > payload.size() - pos) throw CheckpointError(name + ": a section runs past the end of the payload");
-        const std::string_view v = payload.substr(pos, n);
-        pos += n;
-        return v;
-    };
-    while (pos < payload.size()) {
-        std::uint32_t nlen;
-        std::memcpy(&nlen, take(4).data(), 4);
-        const std::string key(take(nlen));
-        std::uint64_t dlen;
-        std::memcpy(&dlen, take(8).data(), 8);
-        ck.sections[key] = std::string(take(std::size_t(dlen)));
-    }
-    for (const char* required : {"meta", "step", "fluid_neighbours", "boundary_neighbours", "active_set", "halo_set",
-                                 "moving_bodies"})
-        if (!ck.sections.count(required))
-            throw CheckpointError(name + ": section '" + required + "' is missing");
-    try {
-        ck.meta = nlohmann::json::parse(ck.sections.at("meta"));
-    } catch (const nlohmann::json::exception& e) {
-        throw CheckpointError(name + ": section 'meta' is not JSON (" + e.what() + ")");
-    }
-    return ck;
 }
 
 void restore_checkpoint(Simulation& sim, const Checkpoint& ck) {

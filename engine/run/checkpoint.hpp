@@ -18,7 +18,9 @@
 /// "boundary_neighbours" (capacity, counts, entries), "active_set", "halo_set",
 /// "moving_bodies".
 #include <filesystem>
+#include <cstdint>
 #include <map>
+#include <string_view>
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -30,6 +32,11 @@ namespace sph {
 class Simulation;
 
 inline constexpr std::uint32_t kCheckpointVersion = 2;
+inline constexpr char kCheckpointMagic[8] = {'S', 'P', 'H', 'C', 'K', 'P', 'T', '\0'};
+inline constexpr std::size_t kCheckpointHeaderBytes = 8 + 4 + 4 + 8 + 8;
+/// A checkpoint larger than this is refused before it is read (the largest a 24 GiB machine
+/// could write is far smaller; a device such as /dev/zero never ends).
+inline constexpr std::uintmax_t kCheckpointMaxBytes = std::uintmax_t(64) << 30;
 
 /// @brief A checkpoint file that cannot be used: missing, truncated, corrupt (checksum),
 /// another format version or precision, or not matching the scene. Bad input: exit code 2.
@@ -49,8 +56,17 @@ struct Checkpoint {
 void write_checkpoint(const std::filesystem::path& file, const Simulation& sim, const nlohmann::json& meta);
 
 /// @brief Reads and verifies a checkpoint. Throws CheckpointError naming the file and what
-/// is wrong with it.
+/// is wrong with it (also when the path is not a regular file or is larger than
+/// kCheckpointMaxBytes).
 Checkpoint read_checkpoint(const std::filesystem::path& file);
+
+/// @brief read_checkpoint on bytes already in memory; `name` is the file named in errors.
+Checkpoint parse_checkpoint(std::string_view bytes, const std::filesystem::path& name);
+
+/// @brief Checks the "meta" keys sph-run writes and reads back (scene_file, scene_text,
+/// overrides, out, checkpoint_every, step, t, recorder, run_id) for presence and type. Throws
+/// CheckpointError naming the file and the key.
+void check_run_meta(const Checkpoint& checkpoint);
 
 /// @brief Overwrites the state of `sim` (built from the same scene) with the checkpoint's.
 /// Throws CheckpointError when the columns or the boundary sampling differ.

@@ -26,14 +26,22 @@ std::string errno_text() { return std::strerror(errno); }
 
 std::atomic<std::uint64_t> g_tmp_counter{0};
 
+/// A short hidden name beside the target, whatever the target's length (a name near the file
+/// system's 255-byte limit plus a suffix would not fit).
 std::filesystem::path temporary_name(const std::filesystem::path& target) {
-    return target.string() + ".tmp" + std::to_string(::getpid()) + "." + std::to_string(g_tmp_counter++);
+    return target.parent_path() /
+           (".sph.tmp" + std::to_string(::getpid()) + "." + std::to_string(g_tmp_counter++));
 }
 
 }  // namespace
 
 AtomicFile::AtomicFile(std::filesystem::path target) : m_target(std::move(target)) {
-    if (m_target.has_parent_path()) std::filesystem::create_directories(m_target.parent_path());
+    if (m_target.has_parent_path()) {
+        std::error_code ec;
+        std::filesystem::create_directories(m_target.parent_path(), ec);
+        if (ec)
+            throw OutputError(m_target.parent_path().string() + ": cannot create the folder (" + ec.message() + ")");
+    }
     const std::filesystem::path dir = m_target.has_parent_path() ? m_target.parent_path() : std::filesystem::path(".");
 #ifdef O_TMPFILE
     m_fd = ::open(dir.c_str(), O_TMPFILE | O_WRONLY | O_CLOEXEC, 0644);
@@ -42,7 +50,7 @@ AtomicFile::AtomicFile(std::filesystem::path target) : m_target(std::move(target
     if (m_fd < 0) {  // no O_TMPFILE here: a named temporary beside the target
         m_named_tmp = temporary_name(m_target);
         m_fd = ::open(m_named_tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-        if (m_fd < 0) throw InputError(m_target.string() + ": cannot open for writing (" + errno_text() + ")");
+        if (m_fd < 0) throw OutputError(m_target.string() + ": cannot open for writing (" + errno_text() + ")");
     }
 }
 
@@ -60,7 +68,7 @@ void AtomicFile::write(std::string_view bytes) {
     while (left > 0) {
         const ssize_t n = ::write(m_fd, p, left);
         if (n < 0 && errno == EINTR) continue;
-        if (n <= 0) throw std::runtime_error(m_target.string() + ": write failed (" + errno_text() + ")");
+        if (n <= 0) throw OutputError(m_target.string() + ": write failed (" + errno_text() + ")");
         p += n;
         left -= std::size_t(n);
     }
@@ -94,12 +102,17 @@ void AtomicFile::commit() {
         if (::linkat(AT_FDCWD, proc.c_str(), AT_FDCWD, m_named_tmp.c_str(), AT_SYMLINK_FOLLOW) != 0) {
             const std::string why = errno_text();
             m_named_tmp.clear();
-            throw std::runtime_error(m_target.string() + ": cannot link the temporary file (" + why + ")");
+            throw OutputError(m_target.string() + ": cannot link the temporary file (" + why + ")");
         }
     }
-    ::close(m_fd);
+    if (::close(m_fd) != 0) {  // a full disk may only show here (delayed allocation)
+        m_fd = -1;
+        throw OutputError(m_target.string() + ": write failed (" + errno_text() + ")");
+    }
     m_fd = -1;
-    std::filesystem::rename(m_named_tmp, m_target);
+    std::error_code ec;
+    std::filesystem::rename(m_named_tmp, m_target, ec);
+    if (ec) throw OutputError(m_target.string() + ": cannot replace it (" + ec.message() + ")");
     m_named_tmp.clear();
 }
 

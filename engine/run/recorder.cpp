@@ -277,6 +277,7 @@ nlohmann::json Recorder::finish(const Simulation& sim, double wall_seconds, int 
                            {"share", total > 0 ? g.total_seconds(i) / total : 0.0}});
     j["systems"] = systems;
     j["systems_total_s"] = total;
+    if (!m_interrupted.empty()) j["interrupted"] = {{"by", m_interrupted}, {"t", sim.time()}, {"step", sim.steps()}};
     write_file_atomic(m_dir / "summary.json", j.dump(2) + "\n");
     return j;
 }

@@ -43,10 +43,13 @@ public:
     /// @brief Commits stats.csv, then returns everything needed to continue the outputs
     /// exactly (frame counter, next frame time, summary accumulators, committed CSV bytes).
     nlohmann::json state();
+    /// @brief Marks the run as stopped before its end (summary.json "interrupted": the signal).
+    void set_interrupted(std::string reason) { m_interrupted = std::move(reason); }
     /// @brief Commits the pending stats.csv rows.
     void flush_stats();
 
 private:
+    std::string m_interrupted;  ///< why the run stopped early ("" when it reached its end)
     void write_frame(const Simulation& sim);
     std::string header(const Simulation& sim) const;
 

@@ -163,16 +163,19 @@ std::string Simulation::step_size_owner() const {
     return owner;
 }
 
-void Simulation::run_until(double end_time, const std::function<void(const Simulation&)>& after_step) {
+bool Simulation::run_until(double end_time, const std::function<void(const Simulation&)>& after_step) {
     // The end in whole ticks (rounded to the nearest): the step-size systems clip the last step
     // to land on it exactly, so round-off never adds a sliver step at the end.
     m_world.clock.t_stop = end_time;
     const Tick end = to_ticks(end_time + 0.5 * kSecondsPerTick);
+    m_stop.store(false, std::memory_order_relaxed);
     while (m_world.clock.t_ticks < end) {
         step();
         if (after_step) after_step(*this);
+        if (m_stop.exchange(false, std::memory_order_relaxed)) break;
     }
     m_world.clock.t_stop = std::numeric_limits<double>::infinity();
+    return m_world.clock.t_ticks >= end;
 }
 
 void Simulation::check_step() {

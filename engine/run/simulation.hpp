@@ -1,6 +1,7 @@
 #pragma once
 /// @file simulation.hpp
 /// @brief Owns a World and the flow graph of a method's systems, and advances time.
+#include <atomic>
 #include <functional>
 #include <memory>
 #include <mutex>
@@ -43,7 +44,11 @@ public:
     /// domain or a step below dt_min, naming the particle, the step and the system.
     void step();
     /// @brief Steps until `end_time` (the scene's by default), calling `after_step` each step.
-    void run_until(double end_time, const std::function<void(const Simulation&)>& after_step = {});
+    /// Returns false when it stopped earlier because request_stop() was called.
+    bool run_until(double end_time, const std::function<void(const Simulation&)>& after_step = {});
+    /// @brief Makes run_until return after the step in progress (safe from another thread or
+    /// a signal handler's flag check; the state stays consistent, ready to be written).
+    void request_stop() { m_stop.store(true, std::memory_order_relaxed); }
 
     World& world() { return m_world; }
     const World& world() const { return m_world; }
@@ -59,6 +64,7 @@ public:
     std::vector<std::pair<std::string, std::size_t>> memory_parts() const;
 
 private:
+    std::atomic<bool> m_stop{false};
     void check_step();
     void spatial_sort();
     /// Scans the fluid columns system i writes for non-finite values (NaN, inf) and keeps

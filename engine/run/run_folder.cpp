@@ -1,0 +1,154 @@
+#include "engine/run/run_folder.hpp"
+
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <chrono>
+#include <climits>
+#include <cstring>
+#include <fstream>
+#include <random>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "engine/core/errors.hpp"
+#include "engine/run/io.hpp"
+
+namespace sph {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr const char* kMarker = "run.json";
+constexpr const char* kLock = ".sph-run.lock";
+/// What sph-run writes into its folder (and so may remove again).
+constexpr const char* kOutputs[] = {"stats.csv", "summary.json", "frames", "probes", "checkpoints"};
+
+std::string list_outputs(const fs::path& dir) {
+    std::string found;
+    for (const char* o : kOutputs) {
+        std::error_code ec;
+        if (fs::exists(dir / o, ec)) found += (found.empty() ? "" : ", ") + std::string(o);
+    }
+    return found;
+}
+
+void remove_outputs(const fs::path& dir, bool keep_checkpoints) {
+    for (const char* o : kOutputs) {
+        if (keep_checkpoints && std::strcmp(o, "checkpoints") == 0) continue;
+        std::error_code ec;
+        fs::remove_all(dir / o, ec);
+        if (ec) throw OutputError((dir / o).string() + ": cannot remove the earlier run's output (" + ec.message() + ")");
+    }
+}
+
+nlohmann::json read_marker(const fs::path& dir) {
+    std::ifstream in(dir / kMarker);
+    if (!in) return nullptr;
+    try {
+        nlohmann::json j = nlohmann::json::parse(in);
+        if (j.is_object() && j.contains("run_id") && j["run_id"].is_string()) return j;
+    } catch (const nlohmann::json::exception&) {
+    }
+    return nullptr;
+}
+
+std::string describe(const nlohmann::json& marker) {
+    std::string s = "run " + marker["run_id"].get<std::string>();
+    if (marker.contains("scene") && marker["scene"].is_string()) s += " of scene '" + marker["scene"].get<std::string>() + "'";
+    return s;
+}
+
+}  // namespace
+
+std::string new_run_id() {
+    std::random_device rd;
+    const std::uint64_t a = (std::uint64_t(rd()) << 32) ^ rd() ^
+                            std::uint64_t(std::chrono::steady_clock::now().time_since_epoch().count());
+    char buf[17];
+    std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(a));
+    return buf;
+}
+
+RunFolder::RunFolder(fs::path dir, std::string run_id, std::string scene, bool resume, bool force)
+    : m_dir(std::move(dir)), m_run_id(std::move(run_id)) {
+    // Checked before anything is created: a name the file system cannot hold.
+    for (const auto& part : m_dir)
+        if (part.native().size() > NAME_MAX)
+            throw InputError(m_dir.string() + ": the folder name '" + part.native().substr(0, 40) + "...' is " +
+                             std::to_string(part.native().size()) + " bytes, more than the file system's " +
+                             std::to_string(NAME_MAX) + " (a shorter scene \"name\" or --out)");
+    std::error_code ec;
+    const auto st = fs::status(m_dir, ec);
+    if (fs::exists(st) && !fs::is_directory(st))
+        throw InputError(m_dir.string() + ": is a file, expected a folder for the outputs (or a path that does not exist yet)");
+    m_created = !fs::exists(st);
+    fs::create_directories(m_dir, ec);
+    if (ec) throw OutputError(m_dir.string() + ": cannot create the output folder (" + ec.message() + ")");
+    m_lock_fd = ::open((m_dir / kLock).c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    if (m_lock_fd < 0) {
+        const std::string why = std::strerror(errno);
+        if (m_created) fs::remove(m_dir, ec);
+        throw OutputError(m_dir.string() + ": cannot write in the output folder (" + why + ")");
+    }
+    const nlohmann::json marker = read_marker(m_dir);
+    if (::flock(m_lock_fd, LOCK_EX | LOCK_NB) != 0) {
+        ::close(m_lock_fd);
+        m_lock_fd = -1;
+        std::string who = "another sph-run";
+        if (!marker.is_null() && marker.contains("pid") && marker["pid"].is_number())
+            who += " (pid " + std::to_string(marker["pid"].get<long long>()) + ", " + describe(marker) + ")";
+        throw InputError(m_dir.string() + ": " + who + " is writing to this folder; wait for it or choose another --out");
+    }
+    const std::string outputs = list_outputs(m_dir);
+    try {
+        if (!resume) {
+            if (!outputs.empty()) {
+                if (marker.is_null() && !force)
+                    throw InputError(m_dir.string() + ": holds outputs (" + outputs +
+                                     ") that no sph-run run claims (no run.json); pass --force to replace them or "
+                                     "choose another --out");
+                remove_outputs(m_dir, false);
+                m_note = "replaced the outputs (" + outputs + ") of " +
+                         (marker.is_null() ? std::string("an unmarked run") : describe(marker)) + " in " + m_dir.string();
+            }
+        } else if (!marker.is_null() && marker["run_id"].get<std::string>() != m_run_id && !m_run_id.empty()) {
+            if (!force)
+                throw InputError(m_dir.string() + ": holds the outputs of " + describe(marker) +
+                                 ", the checkpoint belongs to run " + m_run_id +
+                                 "; resume into the run's own folder or an empty --out, or pass --force to replace them");
+            remove_outputs(m_dir, true);  // the checkpoint being resumed may live in checkpoints/
+            m_note = "replaced the outputs of " + describe(marker) + " in " + m_dir.string();
+        }
+        nlohmann::json mark = {{"run_id", m_run_id},
+                               {"scene", scene},
+                               {"pid", ::getpid()},
+                               {"started_unix_s", std::chrono::duration_cast<std::chrono::seconds>(
+                                                      std::chrono::system_clock::now().time_since_epoch())
+                                                      .count()},
+                               {"resumed", resume},
+                               {"sph_version", SPH_VERSION}};
+        write_file_atomic(m_dir / kMarker, mark.dump(2) + "\n");
+    } catch (...) {
+        ::close(m_lock_fd);
+        m_lock_fd = -1;
+        if (m_created) fs::remove_all(m_dir, ec);
+        throw;
+    }
+}
+
+RunFolder::~RunFolder() {
+    if (m_created && !m_keep) {  // set-up failed before the run wrote anything: leave nothing
+        std::error_code ec;
+        fs::remove(m_dir / kMarker, ec);
+        fs::remove(m_dir / kLock, ec);
+        fs::remove(m_dir, ec);  // only if nothing else is in it
+    }
+    if (m_lock_fd >= 0) ::close(m_lock_fd);
+}
+
+}  // namespace sph

@@ -1,0 +1,105 @@
+#!/usr/bin/env bash
+# sph-run as careless and hostile users run it (issue 18): signals, folders two runs share,
+# outputs the environment refuses, inputs that never end, crafted checkpoints, command-line
+# habits. Each check reproduces a defect that was measured before it was fixed.
+set -uo pipefail
+run=$1; src=$2
+tmp=$(mktemp -d); trap 'chmod -R u+w "$tmp" 2>/dev/null; rm -rf "$tmp"' EXIT
+cd "$tmp" || exit 1
+fail=0
+check() { if ! eval "$2"; then echo "FAIL: $1"; fail=1; else echo "ok: $1"; fi; }
+scene=$src/scenes/dam_break.json
+json() { python3 -c "import json,sys; s=json.load(open(sys.argv[1])); print(eval(sys.argv[2]))" "$@"; }
+wait_for() { for _ in $(seq 1 600); do [ -e "$1" ] && return 0; sleep 0.05; done; return 1; }
+
+# 1. SIGTERM: the run stops after the step in progress, writes a final checkpoint and its
+#    summary (marked interrupted) and exits 128 + 15; the checkpoint continues the run to its end.
+"$run" "$scene" --end 3 --out sig --checkpoint-every 0.05 --no-frames -q 2>sig.err & pid=$!
+wait_for sig/checkpoints/checkpoint_000126.sphckpt; kill -TERM $pid; wait $pid; rc=$?
+check "SIGTERM exits 143 (got $rc)" '[ $rc -eq 143 ]'
+check "the message names the signal and the checkpoint to resume" 'grep -q "stopped by SIGTERM at t = .*continue with: sph-run --resume sig/checkpoints/checkpoint_" sig.err'
+check "summary.json is marked interrupted by SIGTERM before the end" '[ "$(json sig/summary.json "s[\"interrupted\"][\"by\"]")" = SIGTERM ] && json sig/summary.json "1 if s[\"simulated_time_s\"] < 3 else exit(1)" >/dev/null'
+steps=$(json sig/summary.json 's["steps"]')
+check "stats.csv holds every step of the interrupted run ($steps)" '[ $(( $(wc -l < sig/stats.csv) - 1 )) -eq "$steps" ]'
+last=$(printf 'sig/checkpoints/checkpoint_%06d.sphckpt' "$steps")
+check "a final checkpoint at the last step ($last)" '[ -s "$last" ]'
+"$run" --resume "$last" --end 0 -q 2>/dev/null; rc=$?
+check "a resumed run takes no scene options (exit 2, got $rc)" '[ $rc -eq 2 ]'
+
+# 2. A second signal stops at once (no graceful message): the run is stopped (SIGSTOP) while
+#    SIGINT and SIGTERM are queued, so both arrive together when it continues (perhaps on two
+#    threads at once); the first is handled, the second kills it (exit 130 or 143, no summary
+#    rewritten and no graceful message). Job control on: a script's background job ignores
+#    SIGINT otherwise (and sph-run keeps a signal its parent ignores).
+set -m
+"$run" "$scene" --end 3 --out sig2 --no-frames -q 2>sig2.err & pid=$!
+set +m
+wait_for sig2/run.json; sleep 0.3
+kill -STOP $pid; kill -INT $pid; kill -TERM $pid; kill -CONT $pid; wait $pid; rc=$?
+check "SIGINT then SIGTERM: the second stops at once (exit 130/143, no graceful message; got $rc)" '[ $rc -eq 143 -o $rc -eq 130 ] && ! grep -q "stopped by" sig2.err && [ ! -e sig2/summary.json ]'
+set -m
+"$run" "$scene" --end 3 --out sig3 --no-frames -q 2>sig3.err & pid=$!
+set +m
+wait_for sig3/run.json; sleep 0.3; kill -INT $pid; wait $pid; rc=$?
+check "one SIGINT from a terminal: graceful stop, exit 130 (got $rc)" '[ $rc -eq 130 ] && grep -q "stopped by SIGINT" sig3.err && [ "$(json sig3/summary.json "s[\"interrupted\"][\"by\"]")" = SIGINT ]'
+
+# 3. Folders: a shorter run into an old folder replaces its outputs (before: frames 4-6 of the old
+#    run stayed beside frames 0-3 of the new one and summary.json said 4).
+"$run" "$scene" --end 0.2 --out f -q && "$run" "$scene" --end 0.1 --out f -q; rc=$?
+check "second run into the same folder exits 0 (got $rc)" '[ $rc -eq 0 ]'
+check "only the second run's 4 frames remain" '[ "$(ls f/frames | wc -l)" -eq 4 ] && [ ! -e f/frames/frame_00004.vtu ]'
+check "stats.csv rows match the second run's summary" '[ $(( $(wc -l < f/stats.csv) - 1 )) -eq "$(json f/summary.json "s[\"steps\"]")" ]'
+check "run.json names the run and the scene" '[ "$(json f/run.json "s[\"scene\"]")" = dam_break ] && [ "$(json f/run.json "len(s[\"run_id\"])")" -eq 16 ]'
+mkdir -p foreign/frames && touch foreign/stats.csv foreign/frames/frame_00009.vtu foreign/notes.txt
+"$run" "$scene" --end 0.02 --out foreign -q 2>foreign.err; rc=$?
+check "outputs no run.json claims are refused (exit 2, got $rc) naming --force" '[ $rc -eq 2 ] && grep -q "no sph-run run claims (no run.json); pass --force" foreign.err && [ -e foreign/frames/frame_00009.vtu ]'
+"$run" "$scene" --end 0.02 --out foreign --force -q; rc=$?
+check "--force replaces them and keeps other files (exit $rc)" '[ $rc -eq 0 ] && [ ! -e foreign/frames/frame_00009.vtu ] && [ -e foreign/notes.txt ]'
+"$run" "$scene" --end 3 --out busy --no-frames -q & pid=$!
+wait_for busy/run.json; sleep 0.3
+"$run" "$scene" --end 0.02 --out busy -q 2>busy.err; rc=$?
+kill -KILL $pid; wait $pid 2>/dev/null
+check "a folder another live run writes to is refused (exit 2, got $rc)" '[ $rc -eq 2 ] && grep -q "is writing to this folder" busy.err'
+"$run" --resume "$last" --out f -q 2>resume.err; rc=$?
+check "resuming into another run's folder is refused (exit 2, got $rc)" '[ $rc -eq 2 ] && grep -q "holds the outputs of run .* the checkpoint belongs to run" resume.err'
+
+# 4. Outputs the environment refuses: exit 2 (bad input) or 5 (environment), with the path and
+#    the reason, before the simulation starts (before: exit 4 "internal error").
+touch afile
+"$run" "$scene" --out afile -q 2>e1; rc=$?
+check "--out a file: exit 2 naming it (got $rc)" '[ $rc -eq 2 ] && grep -q "afile: is a file, expected a folder" e1'
+"$run" "$scene" --out /proc/sph_out -q 2>e2; rc=$?
+check "--out where no folder can be made: exit 5 with the reason (got $rc)" '[ $rc -eq 5 ] && grep -q "/proc/sph_out: cannot create the output folder (" e2'
+mkdir cwd && (cd cwd && "$run" "$scene" -q --set "name=$(printf 'n%.0s' $(seq 300))" 2>../e3); rc=$?
+check "a 300-character scene name: exit 2, nothing written (got $rc)" '[ $rc -eq 2 ] && grep -q "is 300 bytes, more than the file system" e3 && [ -z "$(ls -A cwd)" ]'
+long=$(printf 'p%.0s' $(seq 251))
+"$run" "$scene" --end 0.01 --no-frames -q --out p251 --set "probes=[{\"type\":\"front\",\"name\":\"$long\",\"method\":\"neighbours\"}]"; rc=$?
+check "a 251-character probe name runs (the temporary file name no longer grows it; exit $rc)" '[ $rc -eq 0 ] && [ -s "p251/probes/$long.csv" ]'
+"$run" "$scene" --end 0.01 -q --out p252 --set "probes=[{\"type\":\"front\",\"name\":\"p$long\",\"method\":\"neighbours\"}]" 2>e4; rc=$?
+check "a 252-character probe name: exit 2 naming the key (got $rc)" '[ $rc -eq 2 ] && grep -q "/probes/0/name" e4 && [ ! -e p252 ]'
+
+# 5. Inputs that never end or are too deep: refused at once.
+mkfifo fifo
+timeout 20 "$run" fifo -q 2>e5; rc=$?
+check "a FIFO as scene: exit 2 at once (got $rc)" '[ $rc -eq 2 ] && grep -q "device, pipe or socket" e5'
+timeout 20 "$run" --resume /dev/zero 2>e6; rc=$?
+check "--resume /dev/zero: exit 2 (got $rc)" '[ $rc -eq 2 ] && grep -q "/dev/zero: is not a regular file" e6'
+timeout 20 "$run" --resume "$tmp" 2>e7; rc=$?
+check "--resume a folder: exit 2 (got $rc)" '[ $rc -eq 2 ] && grep -q "is not a regular file" e7'
+python3 -c "print('{\"a\":' + '[' * 100000 + ']' * 100000 + '}')" > deep.json
+timeout 20 "$run" deep.json 2>e8; rc=$?
+check "10^5-deep JSON: exit 2 naming the depth (got $rc)" '[ $rc -eq 2 ] && grep -q "nested more than 64 deep" e8'
+timeout 20 "$run" --resume "$src/tests/data/checkpoint_corpus/missing_t.sphckpt" 2>e9; rc=$?
+check "a checkpoint without meta key t: exit 2 naming the file and key (got $rc)" '[ $rc -eq 2 ] && grep -q "missing_t.sphckpt: meta key .t. is missing" e9'
+
+# 6. Command-line habits.
+"$run" --set simulation.frame_rate=10 "$scene" --end 0.2 --out habits -q; rc=$?
+check "--set before the scene path takes one value (exit $rc; before: the scene became a --set value)" '[ $rc -eq 0 ] && [ "$(ls habits/frames | wc -l)" -eq 3 ]'
+"$run" "$scene" --end 0.1 --frame-rate 20 --format ply,vtu --out habits2 >h2 2>&1; rc=$?
+check "--frame-rate and --format (exit $rc)" '[ $rc -eq 0 ] && [ -s habits2/frames/frame_00002.ply ] && [ -s habits2/frames/frame_00002.vtu ] && [ ! -e habits2/frames/frame_00003.ply ]'
+check "the last line says how many frames of which formats went where" 'grep -q "wrote 3 frame(s) (ply, vtu) to habits2/frames" h2'
+help=$("$run" --help)
+check "--help lists the exit codes and the output layout" '[[ "$help" == *"5 an output could not be written"* && "$help" == *"run.json"* && "$help" == *"--format"* ]]'
+
+[ $fail -eq 0 ] && echo "sph-run robustness: all checks passed"
+exit $fail
