@@ -217,9 +217,7 @@ std::string read_scene_file(const std::filesystem::path& file) {
     std::error_code ec;
     const auto st = std::filesystem::status(file, ec);
     if (!ec && std::filesystem::exists(st)) {
-        if (std::filesystem::is_directory(st))
-            throw InputError(name + ": cannot open scene file (it is a folder, expected a JSON file)");
-        if (!std::filesystem::is_regular_file(st))
+        if (!std::filesystem::is_regular_file(st) && !std::filesystem::is_directory(st))  // a folder: EISDIR below
             throw InputError(name + ": cannot open scene file (it is a device, pipe or socket, expected a JSON file)");
         const auto size = std::filesystem::file_size(file, ec);
         constexpr std::uintmax_t kMax = std::uintmax_t(64) << 20;

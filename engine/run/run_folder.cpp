@@ -87,12 +87,16 @@ RunFolder::RunFolder(fs::path dir, std::string run_id, std::string scene, bool r
     if (fs::exists(st) && !fs::is_directory(st))
         throw InputError(m_dir.string() + ": is a file, expected a folder for the outputs (or a path that does not exist yet)");
     m_created = !fs::exists(st);
+    if (m_created) {  // the outermost folder this run creates: removed again if set-up fails
+        m_created_root = m_dir;
+        for (fs::path p = m_dir.parent_path(); !p.empty() && !fs::exists(p, ec); p = p.parent_path()) m_created_root = p;
+    }
     fs::create_directories(m_dir, ec);
     if (ec) throw OutputError(m_dir.string() + ": cannot create the output folder (" + ec.message() + ")");
     m_lock_fd = ::open((m_dir / kLock).c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
     if (m_lock_fd < 0) {
         const std::string why = std::strerror(errno);
-        if (m_created) fs::remove(m_dir, ec);
+        if (m_created) fs::remove_all(m_created_root, ec);
         throw OutputError(m_dir.string() + ": cannot write in the output folder (" + why + ")");
     }
     const nlohmann::json marker = read_marker(m_dir);
@@ -136,7 +140,7 @@ RunFolder::RunFolder(fs::path dir, std::string run_id, std::string scene, bool r
     } catch (...) {
         ::close(m_lock_fd);
         m_lock_fd = -1;
-        if (m_created) fs::remove_all(m_dir, ec);
+        if (m_created) fs::remove_all(m_created_root, ec);
         throw;
     }
 }
@@ -146,7 +150,10 @@ RunFolder::~RunFolder() {
         std::error_code ec;
         fs::remove(m_dir / kMarker, ec);
         fs::remove(m_dir / kLock, ec);
-        fs::remove(m_dir, ec);  // only if nothing else is in it
+        // Each folder it created, innermost first, and only while empty.
+        for (fs::path p = m_dir; !p.empty(); p = p.parent_path()) {
+            if (!fs::remove(p, ec) || p == m_created_root) break;
+        }
     }
     if (m_lock_fd >= 0) ::close(m_lock_fd);
 }

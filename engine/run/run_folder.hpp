@@ -37,7 +37,7 @@ public:
     const std::string& note() const { return m_note; }
 
 private:
-    std::filesystem::path m_dir;
+    std::filesystem::path m_dir, m_created_root;
     std::string m_run_id, m_note;
     int m_lock_fd = -1;
     bool m_created = false, m_keep = false;
