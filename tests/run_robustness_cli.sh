@@ -47,7 +47,7 @@ check "one SIGINT from a terminal: graceful stop, exit 130 (got $rc)" '[ $rc -eq
 #    run stayed beside frames 0-3 of the new one and summary.json said 4).
 "$run" "$scene" --end 0.2 --out f -q && "$run" "$scene" --end 0.1 --out f -q; rc=$?
 check "second run into the same folder exits 0 (got $rc)" '[ $rc -eq 0 ]'
-check "only the second run's 4 frames remain" '[ "$(ls f/frames | wc -l)" -eq 4 ] && [ ! -e f/frames/frame_00004.vtu ]'
+check "only the second run's 4 frames remain" '[ "$(ls f/frames/frame_*.vtu | wc -l)" -eq 4 ] && [ ! -e f/frames/frame_00004.vtu ]'
 check "stats.csv rows match the second run's summary" '[ $(( $(wc -l < f/stats.csv) - 1 )) -eq "$(json f/summary.json "s[\"steps\"]")" ]'
 check "run.json names the run and the scene" '[ "$(json f/run.json "s[\"scene\"]")" = dam_break ] && [ "$(json f/run.json "len(s[\"run_id\"])")" -eq 16 ]'
 mkdir -p foreign/frames && touch foreign/stats.csv foreign/frames/frame_00009.vtu foreign/notes.txt
@@ -94,7 +94,7 @@ check "a checkpoint without meta key t: exit 2 naming the file and key (got $rc)
 
 # 6. Command-line habits.
 "$run" --set simulation.frame_rate=10 "$scene" --end 0.2 --out habits -q; rc=$?
-check "--set before the scene path takes one value (exit $rc; before: the scene became a --set value)" '[ $rc -eq 0 ] && [ "$(ls habits/frames | wc -l)" -eq 3 ]'
+check "--set before the scene path takes one value (exit $rc; before: the scene became a --set value)" '[ $rc -eq 0 ] && [ "$(ls habits/frames/frame_*.vtu | wc -l)" -eq 3 ]'
 "$run" "$scene" --end 0.1 --frame-rate 20 --format ply,vtu --out habits2 >h2 2>&1; rc=$?
 check "--frame-rate and --format (exit $rc)" '[ $rc -eq 0 ] && [ -s habits2/frames/frame_00002.ply ] && [ -s habits2/frames/frame_00002.vtu ] && [ ! -e habits2/frames/frame_00003.ply ]'
 check "the last line says how many frames of which formats went where" 'grep -q "wrote 3 frame(s) (ply, vtu) to habits2/frames" h2'

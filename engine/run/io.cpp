@@ -4,6 +4,7 @@
 #include <sys/resource.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 
 #include <cstdio>
@@ -200,6 +201,21 @@ std::vector<FrameArray> gather(const World& world, const std::vector<std::string
     if (store.has(comp::id.name)) {
         const auto v = store.get(comp::id);
         out.push_back(make_array("id", v.data(), n, 1));
+        // Points in id order: the store's rows follow the spatial sort, which reorders almost
+        // every row between frames; programs that match points by index across frames (Blender's
+        // point caches, a ParaView temporal filter) then see the same particle at the same index.
+        if (!std::is_sorted(v.begin(), v.end())) {
+            std::vector<std::uint32_t> order(n);
+            for (std::size_t i = 0; i < n; ++i) order[i] = std::uint32_t(i);
+            std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) { return v[a] < v[b]; });
+            for (FrameArray& a : out) {
+                const std::size_t bytes = a.value_size() * std::size_t(a.components);
+                std::string sorted(a.bytes.size(), '\0');
+                for (std::size_t k = 0; k < n; ++k)
+                    std::memcpy(sorted.data() + k * bytes, a.bytes.data() + std::size_t(order[k]) * bytes, bytes);
+                a.bytes = std::move(sorted);
+            }
+        }
     }
     return out;
 }

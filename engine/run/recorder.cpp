@@ -73,6 +73,15 @@ Recorder::Recorder(std::filesystem::path dir, const Simulation& sim, const nlohm
     : m_dir(std::move(dir)), m_probes(sim.world().scene.probes) {
     std::filesystem::create_directories(m_dir);
     m_frame = st.at("frame").get<std::size_t>();
+    if (const auto it = st.find("frame_times"); it != st.end()) {
+        m_frame_times = it->get<std::vector<double>>();
+    } else {  // a checkpoint of an earlier version: the nominal times
+        for (std::size_t k = 0; k < m_frame; ++k)
+            m_frame_times.push_back(double(k) / sim.world().scene.simulation.frame_rate);
+    }
+    if (m_frame_times.size() != m_frame)
+        throw InputError("the checkpoint's recorder holds " + std::to_string(m_frame_times.size()) +
+                         " frame times for " + std::to_string(m_frame) + " frames");
     m_next_frame_time = st.at("next_frame_time").get<double>();
     m_collisions = st.at("collisions").get<std::uint64_t>();
     m_active_fraction_sum = st.at("active_fraction_sum").get<double>();
@@ -111,6 +120,7 @@ Recorder::Recorder(std::filesystem::path dir, const Simulation& sim, const nlohm
 nlohmann::json Recorder::state() {
     flush_stats();
     return {{"frame", m_frame},
+            {"frame_times", m_frame_times},
             {"next_frame_time", m_next_frame_time},
             {"collisions", m_collisions},
             {"active_fraction_sum", m_active_fraction_sum},
@@ -135,9 +145,30 @@ void Recorder::write_frame(const Simulation& sim) {
     char name[32];
     std::snprintf(name, sizeof name, "frame_%05zu", m_frame);
     sph::write_frame(m_dir / "frames" / name, sim.world());
+    m_frame_times.push_back(sim.time());
     ++m_frame;
+    write_collection(sim.world());
     m_next_frame_time = double(m_frame) / sim.world().scene.simulation.frame_rate;
     flush_stats();
+}
+
+void Recorder::write_collection(const World& w) const {
+    // A ParaView collection of the .vtu frames with the time each was written at (the first step
+    // that reached k / frame_rate), so ParaView's time is the simulated time.
+    if (std::find(w.scene.output.formats.begin(), w.scene.output.formats.end(), FrameFormat::Vtu) ==
+        w.scene.output.formats.end())
+        return;
+    std::ostringstream x;
+    x << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
+         "  <Collection>\n"
+      << std::setprecision(17);
+    for (std::size_t k = 0; k < m_frame_times.size(); ++k) {
+        char name[32];
+        std::snprintf(name, sizeof name, "frame_%05zu.vtu", k);
+        x << "    <DataSet timestep=\"" << m_frame_times[k] << "\" group=\"\" part=\"0\" file=\"" << name << "\"/>\n";
+    }
+    x << "  </Collection>\n</VTKFile>\n";
+    write_file_atomic(m_dir / "frames" / "frames.pvd", x.str());
 }
 
 void Recorder::after_step(const Simulation& sim) {

@@ -51,6 +51,8 @@ public:
 private:
     std::string m_interrupted;  ///< why the run stopped early ("" when it reached its end)
     void write_frame(const Simulation& sim);
+    /// frames/frames.pvd: every .vtu frame so far with its simulated time (ParaView).
+    void write_collection(const World& w) const;
     std::string header(const Simulation& sim) const;
 
     std::filesystem::path m_dir;
@@ -58,6 +60,7 @@ private:
     std::string m_pending;           ///< rows not yet committed to stats.csv
     std::uint64_t m_stats_bytes = 0;  ///< bytes of stats.csv committed so far
     std::size_t m_frame = 0;
+    std::vector<double> m_frame_times;  ///< simulated time of each frame written
     std::uint64_t m_collisions = 0;
     double m_active_fraction_sum = 0;  ///< sum over steps of active / fluid particles
     double m_dt_min = 0, m_dt_max = 0, m_rho_err_max = 0;

@@ -1,0 +1,51 @@
+"""Opens an sph-run output folder in ParaView (pvbatch) the way a user does, through
+frames/frames.pvd, and checks what ParaView sees against the run's own records:
+  - the time steps are the .pvd's, the first 0, each equal to the t of a stats.csv row;
+  - every frame has summary.json's fluid particle count, the arrays asked for, and ids
+    0..N-1 in order (frames are written in id order, so point k is particle k in every frame);
+  - the positions of the last frame, read by ParaView, match the .vtu's own TimeValue frame.
+Usage: pvbatch paraview_check.py OUT_DIR ARRAY[,ARRAY...]   (exit 1 with the reason on failure)"""
+import csv
+import json
+import sys
+
+from paraview import servermanager
+from paraview.simple import PVDReader
+from vtk.util.numpy_support import vtk_to_numpy
+
+out, arrays = sys.argv[1], sys.argv[2].split(",")
+summary = json.load(open(f"{out}/summary.json"))
+# the end of each step (stats.csv's t is the step's start), to the file's 9 digits
+rows = [0.0] + [float(r["t"]) + float(r["dt"]) for r in csv.DictReader(open(f"{out}/stats.csv"))]
+reader = PVDReader(FileName=f"{out}/frames/frames.pvd")
+times = list(reader.TimestepValues)
+fail = []
+if len(times) != summary["frames"]:
+    fail.append(f"{len(times)} time steps in ParaView, summary.json says {summary['frames']} frames")
+if not times or times[0] != 0.0:
+    fail.append(f"the first time is {times[:1]}, expected 0")
+for t in times:
+    if min(abs(t - r) for r in rows) > 1e-8 * max(1.0, t):
+        fail.append(f"time {t!r} is the end of no step in stats.csv")
+    reader.UpdatePipeline(t)
+    data = servermanager.Fetch(reader)
+    n = data.GetNumberOfPoints()
+    if n != summary["fluid_particles"]:
+        fail.append(f"t = {t}: {n} points, expected {summary['fluid_particles']}")
+    pd = data.GetPointData()
+    names = [pd.GetArrayName(i) for i in range(pd.GetNumberOfArrays())]
+    for a in arrays + ["id"]:
+        if a not in names:
+            fail.append(f"t = {t}: no array '{a}' (has {names})")
+    if "id" in names:
+        ids = vtk_to_numpy(pd.GetArray("id"))
+        if not (ids == range(n)).all():
+            fail.append(f"t = {t}: ids are not 0..{n - 1} in order")
+    tv = data.GetFieldData().GetArray("TimeValue")
+    if tv is None or abs(tv.GetValue(0) - t) > 1e-12:
+        fail.append(f"t = {t}: the frame's TimeValue is {None if tv is None else tv.GetValue(0)}")
+print(f"ParaView read {len(times)} time steps of {summary['fluid_particles']} points: "
+      + ("ok" if not fail else "FAILED"))
+for f in fail:
+    print("FAIL:", f)
+sys.exit(1 if fail else 0)
