@@ -5,9 +5,10 @@ set -euo pipefail
 PACKAGES=(build-essential cmake libtbb-dev libeigen3-dev libspdlog-dev nlohmann-json3-dev libcli11-dev
           libgtest-dev libgmock-dev libbenchmark-dev libpng-dev libhwy-dev python3 python3-numpy python3-matplotlib
           clang libclang-rt-14-dev)  # clang + its runtime: libFuzzer for tools/fuzz.sh
-# --test: also the programs the tests open the outputs with (ParaView's pvbatch, headless).
+# --test: also the programs the tests open the outputs with (ParaView's pvbatch, headless
+# under xvfb-run, and Blender).
 if [ "${1:-}" = "--test" ]; then
-  PACKAGES+=(paraview python3-paraview xvfb xauth)
+  PACKAGES+=(paraview python3-paraview xvfb xauth blender)
 fi
 missing=()
 for p in "${PACKAGES[@]}"; do

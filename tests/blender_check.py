@@ -1,0 +1,86 @@
+"""Runs inside Blender (blender -b --factory-startup --python-exit-code 1 --python THIS --
+IMPORTER OUT_DIR): imports an sph-run folder with tools/blender/sph_import.py and checks what
+Blender holds against the PLY files, read here independently (struct, no numpy):
+  - one object for the whole run (not one per frame), frame range = the run's frame count;
+  - at the first, middle and last frame: one vertex per fluid particle; vertex k is particle k
+    (attribute id = k) at the PLY's (x, -z, y) (z-up) to 1e-6 m; velocity a vector attribute,
+    density and pressure float attributes; density within 5 % of the rest density (after
+    frame 0, which is written before the first density evaluation);
+  - up is +Z: the fluid rests on z >= 0 at frame 0 and falls (mean velocity z < 0) at the last.
+Exit 1 with the reasons on any failure."""
+import importlib.util
+import json
+import os
+import struct
+import sys
+
+import bpy
+
+importer, out = sys.argv[sys.argv.index("--") + 1:][:2]
+spec = importlib.util.spec_from_file_location("sph_import", importer)
+sph_import = importlib.util.module_from_spec(spec)
+spec.loader.exec_module(sph_import)
+summary = json.load(open(os.path.join(out, "summary.json")))
+n_fluid = summary["fluid_particles"]
+fail = []
+
+
+def ply_rows(path, rows):
+    """{property: value} of the given vertex rows of an sph PLY frame, by struct."""
+    with open(path, "rb") as f:
+        props = []
+        while True:
+            w = f.readline().decode("ascii").split()
+            if w and w[0] == "property":
+                props.append((w[2], {"float": "f", "double": "d", "uchar": "B", "uint": "I"}[w[1]]))
+            if w and w[0] == "end_header":
+                break
+        fmt = "<" + "".join(t for _, t in props)
+        size = struct.calcsize(fmt)
+        body = f.read()
+    return [dict(zip([p for p, _ in props], struct.unpack_from(fmt, body, r * size))) for r in rows]
+
+
+for o in list(bpy.data.objects):
+    bpy.data.objects.remove(o)
+obj = sph_import.import_run(out)
+scene = bpy.context.scene
+files = sph_import.frames_of(out)
+if len(bpy.data.objects) != 1:
+    fail.append(f"{len(bpy.data.objects)} objects, expected one for the whole run")
+if scene.frame_end - scene.frame_start + 1 != len(files) or len(files) != summary["frames"]:
+    fail.append(f"frames {scene.frame_start}..{scene.frame_end} for {len(files)} PLY files, summary {summary['frames']}")
+rho0 = summary["physics"].get("rest_density", 1000.0) if isinstance(summary.get("physics"), dict) else 1000.0
+for k in sorted({0, len(files) // 2, len(files) - 1}):
+    scene.frame_set(scene.frame_start + k)
+    mesh = obj.data
+    n = len(mesh.vertices)
+    if n != n_fluid:
+        fail.append(f"frame {k}: {n} vertices, expected {n_fluid}")
+        continue
+    attrs = {a.name: (a.data_type, a.domain) for a in mesh.attributes}
+    for name, kind in [("velocity", "FLOAT_VECTOR"), ("density", "FLOAT"), ("pressure", "FLOAT"), ("id", "INT")]:
+        if attrs.get(name) != (kind, "POINT"):
+            fail.append(f"frame {k}: attribute {name} is {attrs.get(name)}, expected ({kind}, POINT)")
+    if "id" in attrs and any(mesh.attributes["id"].data[i].value != i for i in range(0, n, 97)):
+        fail.append(f"frame {k}: vertex i does not hold particle i")
+    for i, row in zip((0, n - 1), ply_rows(files[k], (0, n - 1))):
+        want = (row["x"], -row["z"], row["y"])
+        got = tuple(mesh.vertices[i].co)
+        if max(abs(a - b) for a, b in zip(got, want)) > 1e-6:
+            fail.append(f"frame {k}: vertex {i} at {got}, the PLY (z-up) says {want}")
+    dens = [d.value for d in mesh.attributes["density"].data] if "density" in attrs else [0]
+    mean_rho = sum(dens) / len(dens)
+    if k > 0 and abs(mean_rho / rho0 - 1) > 0.05:  # frame 0 precedes the first density evaluation
+        fail.append(f"frame {k}: mean density {mean_rho:.1f}, expected within 5 % of {rho0}")
+    zs = [v.co.z for v in mesh.vertices]
+    if k == 0 and min(zs) < 0:
+        fail.append(f"frame 0: lowest particle at z = {min(zs)}, expected on or above the floor (z-up)")
+    if k == len(files) - 1 and k > 0:
+        vz = sum(d.vector.z for d in mesh.attributes["velocity"].data) / n
+        if not vz < 0:
+            fail.append(f"frame {k}: mean velocity z = {vz}, expected the column falling (< 0)")
+print(f"Blender imported {len(files)} frames of {n_fluid} particles as '{obj.name}': " + ("ok" if not fail else "FAILED"))
+for f in fail:
+    print("FAIL:", f)
+sys.exit(1 if fail else 0)
