@@ -1,12 +1,15 @@
 """Runs inside Blender (blender -b --factory-startup --python-exit-code 1 --python THIS --
 IMPORTER OUT_DIR): imports an sph-run folder with tools/blender/sph_import.py and checks what
 Blender holds against the PLY files, read here independently (struct, no numpy):
-  - one object for the whole run (not one per frame), frame range = the run's frame count;
+  - one object for the whole run (not one per frame), frame range = the run's frame count, and
+    the tank as a second object (every boundary particle, the floor below the fluid, normals),
+    and moving bodies as a third, animated with their own PLY files;
   - at the first, middle and last frame: one vertex per fluid particle; vertex k is particle k
     (attribute id = k) at the PLY's (x, -z, y) (z-up) to 1e-6 m; velocity a vector attribute,
     density and pressure float attributes; density within 5 % of the rest density (after
     frame 0, which is written before the first density evaluation);
-  - up is +Z: the fluid rests on z >= 0 at frame 0 and falls (mean velocity z < 0) at the last.
+  - up is +Z: the fluid rests on z >= 0 at frame 0 and (dam_break) falls, mean velocity z < 0,
+    at the last.
 Exit 1 with the reasons on any failure."""
 import importlib.util
 import json
@@ -46,8 +49,17 @@ for o in list(bpy.data.objects):
 obj = sph_import.import_run(out)
 scene = bpy.context.scene
 files = sph_import.frames_of(out)
-if len(bpy.data.objects) != 1:
-    fail.append(f"{len(bpy.data.objects)} objects, expected one for the whole run")
+names = sorted(o.name for o in bpy.data.objects)
+moving = sph_import.frames_of(out, "boundary_moving")
+if names != ["sph_boundary"] + (["sph_boundary_moving"] if moving else []) + ["sph_fluid"]:
+    fail.append(f"objects {names}, expected the fluid (one for the whole run) and the boundary")
+else:
+    b = bpy.data.objects["sph_boundary"].data
+    zb = [v.co.z for v in b.vertices]
+    n_moving = len(bpy.data.objects["sph_boundary_moving"].data.vertices) if moving else 0
+    if len(b.vertices) + n_moving != summary["boundary_particles"] or min(zb) > 0 or "wall_normal" not in b.attributes:
+        fail.append(f"the boundary: {len(b.vertices)} + {n_moving} moving points (summary {summary['boundary_particles']}), "
+                    f"lowest z {min(zb)} (expected the floor below the fluid), attributes {list(b.attributes.keys())}")
 if scene.frame_end - scene.frame_start + 1 != len(files) or len(files) != summary["frames"]:
     fail.append(f"frames {scene.frame_start}..{scene.frame_end} for {len(files)} PLY files, summary {summary['frames']}")
 rho0 = summary["physics"].get("rest_density", 1000.0) if isinstance(summary.get("physics"), dict) else 1000.0
@@ -76,7 +88,13 @@ for k in sorted({0, len(files) // 2, len(files) - 1}):
     zs = [v.co.z for v in mesh.vertices]
     if k == 0 and min(zs) < 0:
         fail.append(f"frame 0: lowest particle at z = {min(zs)}, expected on or above the floor (z-up)")
-    if k == len(files) - 1 and k > 0:
+    if moving:
+        mv = bpy.data.objects["sph_boundary_moving"].data
+        row = ply_rows(moving[k], (0,))[0]
+        want = (row["x"], -row["z"], row["y"])
+        if max(abs(a - b) for a, b in zip(tuple(mv.vertices[0].co), want)) > 1e-6:
+            fail.append(f"frame {k}: the moving body's first point at {tuple(mv.vertices[0].co)}, its PLY says {want}")
+    if k == len(files) - 1 and k > 0 and summary["scene"] == "dam_break":
         vz = sum(d.vector.z for d in mesh.attributes["velocity"].data) / n
         if not vz < 0:
             fail.append(f"frame {k}: mean velocity z = {vz}, expected the column falling (< 0)")

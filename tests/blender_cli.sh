@@ -13,6 +13,12 @@ blender -b --factory-startup --python-exit-code 1 --python "$src/tests/blender_c
   "$src/tools/blender/sph_import.py" "$tmp/run" >"$tmp/check.log" 2>&1; rc=$?
 grep -E "^(FAIL|Blender imported)" "$tmp/check.log"
 [ $rc -eq 0 ] || { echo "FAIL: blender_check.py exited $rc"; tail -20 "$tmp/check.log"; fail=1; }
+# A moving body (stirring_pool's paddle) becomes an animated object of its own.
+"$run" "$src/scenes/stirring_pool.json" --end 0.1 --format ply --out "$tmp/pool" -q || fail=1
+blender -b --factory-startup --python-exit-code 1 --python "$src/tests/blender_check.py" -- \
+  "$src/tools/blender/sph_import.py" "$tmp/pool" >"$tmp/pool.log" 2>&1; rc=$?
+grep -E "^(FAIL|Blender imported)" "$tmp/pool.log"
+[ $rc -eq 0 ] || { echo "FAIL: blender_check.py (stirring_pool) exited $rc"; tail -20 "$tmp/pool.log"; fail=1; }
 # The command-line form writes a .blend that holds the object and the importer.
 blender -b --factory-startup --python-exit-code 1 --python "$src/tools/blender/sph_import.py" -- "$tmp/run" \
   --save "$tmp/run.blend" >/dev/null 2>&1 || { echo "FAIL: sph_import.py -- OUT --save"; fail=1; }

@@ -3,7 +3,8 @@ frames/frames.pvd, and checks what ParaView sees against the run's own records:
   - the time steps are the .pvd's, the first 0, each equal to the t of a stats.csv row;
   - every frame has summary.json's fluid particle count, the arrays asked for, and ids
     0..N-1 in order (frames are written in id order, so point k is particle k in every frame);
-  - the positions of the last frame, read by ParaView, match the .vtu's own TimeValue frame.
+  - each frame's TimeValue is its time step;
+  - frames/boundary.vtu holds every boundary particle (scenes without moving bodies) with normals.
 Usage: pvbatch paraview_check.py OUT_DIR ARRAY[,ARRAY...]   (exit 1 with the reason on failure)"""
 import csv
 import json
@@ -44,6 +45,18 @@ for t in times:
     tv = data.GetFieldData().GetArray("TimeValue")
     if tv is None or abs(tv.GetValue(0) - t) > 1e-12:
         fail.append(f"t = {t}: the frame's TimeValue is {None if tv is None else tv.GetValue(0)}")
+# The walls, written once (a scene without moving bodies: all of its boundary particles).
+import os
+from paraview.simple import XMLUnstructuredGridReader
+bfile = f"{out}/frames/boundary.vtu"
+if not os.path.exists(bfile):
+    fail.append("no frames/boundary.vtu")
+else:
+    b = servermanager.Fetch(XMLUnstructuredGridReader(FileName=[bfile]))
+    bnames = [b.GetPointData().GetArrayName(i) for i in range(b.GetPointData().GetNumberOfArrays())]
+    if b.GetNumberOfPoints() != summary["boundary_particles"] or "normal" not in bnames:
+        fail.append(f"boundary.vtu: {b.GetNumberOfPoints()} points (summary {summary['boundary_particles']}), "
+                    f"arrays {bnames}")
 print(f"ParaView read {len(times)} time steps of {summary['fluid_particles']} points: "
       + ("ok" if not fail else "FAILED"))
 for f in fail:

@@ -123,7 +123,7 @@ def frame_files(inputs):
     for item in inputs:
         p = pathlib.Path(item)
         if p.is_dir():
-            found = sorted(p.glob("*.vtu")) or sorted((p / "frames").glob("*.vtu"))
+            found = sorted(p.glob("frame_*.vtu")) or sorted((p / "frames").glob("frame_*.vtu"))
             if not found:
                 raise VtuError(f"{p}: no .vtu frames in it (nor in {p / 'frames'})")
             files += found

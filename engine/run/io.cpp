@@ -283,10 +283,15 @@ std::vector<std::string> frame_attributes(const World& world) {
     return a;
 }
 
-void write_vtu(const std::filesystem::path& file, const World& world,
-               const std::vector<std::string>& attributes) {
-    const std::size_t n = world.fluid.store.size();
-    std::vector<FrameArray> arrays = gather(world, attributes);
+namespace {
+
+std::size_t point_count(const std::vector<FrameArray>& arrays) {
+    return arrays.empty() ? 0 : arrays[0].bytes.size() / (arrays[0].value_size() * 3);
+}
+
+/// The .vtu bytes of `arrays` (arrays[0] the positions) at simulated time t.
+std::string vtu_text(const std::vector<FrameArray>& arrays, double t) {
+    const std::size_t n = point_count(arrays);
     std::vector<std::int64_t> conn(n), offs(n);
     std::vector<std::uint8_t> types(n, 1);  // VTK_VERTEX
     for (std::size_t i = 0; i < n; ++i) {
@@ -316,7 +321,7 @@ void write_vtu(const std::filesystem::path& file, const World& world,
         << "  <UnstructuredGrid>\n"
         // Full precision, so a frame's time matches the end of a stats.csv step exactly.
         << "    <FieldData>\n      <DataArray type=\"Float64\" Name=\"TimeValue\" NumberOfTuples=\"1\" format=\"ascii\">"
-        << std::setprecision(17) << world.clock.t << "</DataArray>\n    </FieldData>\n"
+        << std::setprecision(17) << t << "</DataArray>\n    </FieldData>\n"
         << "    <Piece NumberOfPoints=\"" << n << "\" NumberOfCells=\"" << n << "\">\n";
     xml << "      <PointData>\n";
     for (std::size_t k = 1; k < arrays.size(); ++k)
@@ -331,19 +336,18 @@ void write_vtu(const std::filesystem::path& file, const World& world,
     std::string out = xml.str();
     out += appended;
     out += "\n  </AppendedData>\n</VTKFile>\n";
-    write_file_atomic(file, out);
+    return out;
 }
 
-void write_bgeo(const std::filesystem::path& file, const World& world,
-                const std::vector<std::string>& attributes) {
+/// The .bgeo bytes of `arrays` (arrays[0] the positions).
+std::string bgeo_text(const std::vector<FrameArray>& arrays) {
     // Houdini's classic binary geometry, version 5, as partio reads and writes it
     // (partio src/lib/io/BGEO.cpp): a big-endian header, the point attribute dictionary, then
     // per point P as x y z w (w = 1) and each attribute's 32-bit words, no primitives, no
     // detail attributes, and the two closing bytes 0x00 0xff. Houdini's names are used:
     // "v" for velocity, "accel" for acceleration. Floats are float32 and integers int32 (the
     // format has no 64-bit type), so dt is rounded to float here.
-    std::vector<FrameArray> arrays = gather(world, attributes);
-    const std::size_t n = world.fluid.store.size();
+    const std::size_t n = point_count(arrays);
     std::string out;
     out.append("Bgeo", 4);
     out.push_back('V');
@@ -372,18 +376,17 @@ void write_bgeo(const std::filesystem::path& file, const World& world,
     }
     out.push_back('\x00');
     out.push_back('\xff');
-    write_file_atomic(file, out);
+    return out;
 }
 
-void write_ply(const std::filesystem::path& file, const World& world,
-               const std::vector<std::string>& attributes) {
+/// The .ply bytes of `arrays` (arrays[0] the positions) at simulated time t.
+std::string ply_text(const std::vector<FrameArray>& arrays, double t) {
     // PLY 1.0, binary little-endian (Turk's format as Blender imports it): one `vertex`
     // element, x y z then one property per attribute component, named <attr> for scalars and
     // <attr>_x/_y/_z for vectors; types as stored (dt as double, active as uchar, id as uint).
-    std::vector<FrameArray> arrays = gather(world, attributes);
-    const std::size_t n = world.fluid.store.size();
+    const std::size_t n = point_count(arrays);
     std::ostringstream h;
-    h << "ply\nformat binary_little_endian 1.0\ncomment sph frame, t = " << std::setprecision(17) << world.clock.t
+    h << "ply\nformat binary_little_endian 1.0\ncomment sph frame, t = " << std::setprecision(17) << t
       << " s\nelement vertex " << n << "\n";
     const char* axes[] = {"x", "y", "z"};
     for (int c = 0; c < 3; ++c) h << "property " << ply_type(arrays[0].type) << ' ' << axes[c] << "\n";
@@ -404,18 +407,52 @@ void write_ply(const std::filesystem::path& file, const World& world,
             const std::size_t bytes = a.value_size() * std::size_t(a.components);
             out.append(a.bytes.data() + i * bytes, bytes);
         }
-    write_file_atomic(file, out);
+    return out;
+}
+
+void write_arrays(const std::filesystem::path& stem, const std::vector<FrameArray>& arrays,
+                  const std::vector<FrameFormat>& formats, double t) {
+    for (const FrameFormat f : formats) {
+        switch (f) {
+            case FrameFormat::Vtu: write_file_atomic(stem.string() + ".vtu", vtu_text(arrays, t)); break;
+            case FrameFormat::Bgeo: write_file_atomic(stem.string() + ".bgeo", bgeo_text(arrays)); break;
+            case FrameFormat::Ply: write_file_atomic(stem.string() + ".ply", ply_text(arrays, t)); break;
+        }
+    }
+}
+
+}  // namespace
+
+void write_vtu(const std::filesystem::path& file, const World& world, const std::vector<std::string>& attributes) {
+    write_file_atomic(file, vtu_text(gather(world, attributes), world.clock.t));
+}
+
+void write_bgeo(const std::filesystem::path& file, const World& world, const std::vector<std::string>& attributes) {
+    write_file_atomic(file, bgeo_text(gather(world, attributes)));
+}
+
+void write_ply(const std::filesystem::path& file, const World& world, const std::vector<std::string>& attributes) {
+    write_file_atomic(file, ply_text(gather(world, attributes), world.clock.t));
+}
+
+void write_boundary(const std::filesystem::path& stem, const World& world, std::size_t begin, std::size_t end,
+                    double t) {
+    const auto& store = world.boundary.store;
+    end = std::min(end, store.size());
+    begin = std::min(begin, end);
+    const auto rows = [&](std::span<const Vec3> v) { return v.subspan(begin, end - begin); };
+    std::vector<FrameArray> arrays;
+    arrays.push_back(vec3_array("position", rows(store.get(comp::position))));
+    if (store.has(comp::normal.name)) arrays.push_back(vec3_array("normal", rows(store.get(comp::normal))));
+    if (store.has(comp::velocity.name)) arrays.push_back(vec3_array("velocity", rows(store.get(comp::velocity))));
+    std::vector<std::uint32_t> index(end - begin);
+    for (std::size_t i = 0; i < index.size(); ++i) index[i] = std::uint32_t(begin + i);
+    arrays.push_back(make_array("id", index.data(), index.size(), 1));
+    write_arrays(stem, arrays, world.scene.output.formats, t);
 }
 
 void write_frame(const std::filesystem::path& stem, const World& world) {
-    const std::vector<std::string> attributes = frame_attributes(world);
-    for (const FrameFormat f : world.scene.output.formats) {
-        switch (f) {
-            case FrameFormat::Vtu: write_vtu(stem.string() + ".vtu", world, attributes); break;
-            case FrameFormat::Bgeo: write_bgeo(stem.string() + ".bgeo", world, attributes); break;
-            case FrameFormat::Ply: write_ply(stem.string() + ".ply", world, attributes); break;
-        }
-    }
+    write_arrays(stem, gather(world, frame_attributes(world)), world.scene.output.formats, world.clock.t);
 }
 
 std::size_t peak_memory_bytes() {

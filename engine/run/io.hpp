@@ -67,6 +67,13 @@ void write_ply(const std::filesystem::path& file, const World& world,
 /// with frame_attributes(world).
 void write_frame(const std::filesystem::path& stem, const World& world);
 
+/// @brief Writes boundary particles [begin, end) as `stem`.vtu / .bgeo / .ply (the scene's
+/// formats): position, normal and (moving bodies) velocity, and `id` = the boundary row, so a
+/// render shows the tank, the obstacles and the paddle beside the fluid; `t` is the time the
+/// files carry.
+void write_boundary(const std::filesystem::path& stem, const World& world, std::size_t begin, std::size_t end,
+                    double t);
+
 /// @brief Peak resident memory of this process in bytes (getrusage).
 std::size_t peak_memory_bytes();
 

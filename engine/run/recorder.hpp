@@ -61,6 +61,7 @@ private:
     std::uint64_t m_stats_bytes = 0;  ///< bytes of stats.csv committed so far
     std::size_t m_frame = 0;
     std::vector<double> m_frame_times;  ///< simulated time of each frame written
+    bool m_boundary_written = false;    ///< frames/boundary.* (the static boundary) exists
     std::uint64_t m_collisions = 0;
     double m_active_fraction_sum = 0;  ///< sum over steps of active / fluid particles
     double m_dt_min = 0, m_dt_max = 0, m_rho_err_max = 0;

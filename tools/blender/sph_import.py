@@ -24,8 +24,11 @@ import bpy
 import numpy as np
 from bpy.app.handlers import persistent
 
+# Names Blender keeps for itself (mesh.attributes.new returns None for them).
+_RESERVED = {"normal": "wall_normal", "position": "sph_position"}
 _PLY_TYPES = {"float": "<f4", "double": "<f8", "uchar": "u1", "uint": "<u4", "int": "<i4"}
-_FRAME = re.compile(r"frame_(\d{5})\.ply$")
+def _numbered(prefix):
+    return re.compile(prefix + r"_(\d{5})\.ply$")
 
 
 def read_ply(path):
@@ -57,13 +60,15 @@ def read_ply(path):
     return {name: data[name] for name, _ in props}, t
 
 
-def frames_of(folder):
-    """The PLY frame files of an output folder, in frame order."""
+def frames_of(folder, prefix="frame"):
+    """The PLY files prefix_NNNNN.ply of an output folder's frames/, in frame order (prefix
+    "frame": the fluid; "boundary_moving": the moving bodies)."""
     d = os.path.join(folder, "frames")
     if not os.path.isdir(d):
         raise FileNotFoundError(f"{folder}: no frames/ folder (is this an sph-run output folder?)")
-    files = sorted(f for f in os.listdir(d) if _FRAME.search(f))
-    if not files:
+    pattern = _numbered(prefix)
+    files = sorted(f for f in os.listdir(d) if pattern.search(f))
+    if not files and prefix == "frame":
         raise FileNotFoundError(f"{d}: no frame_NNNNN.ply (run sph-run with --format ply)")
     return [os.path.join(d, f) for f in files]
 
@@ -99,11 +104,14 @@ def load_frame(mesh, path):
         mesh.vertices.add(n)
     mesh.vertices.foreach_set("co", co.ravel())
     for name, (kind, values) in _attributes(cols).items():
+        name = _RESERVED.get(name, name)
         a = mesh.attributes.get(name)
         if a is None or a.data_type != kind or a.domain != "POINT":
             if a is not None:
                 mesh.attributes.remove(a)
             a = mesh.attributes.new(name, kind, "POINT")
+            if a is None:
+                raise ValueError(f"{path}: Blender refuses an attribute named '{name}'")
         a.data.foreach_set("vector" if kind == "FLOAT_VECTOR" else "value", values.ravel())
     mesh["sph_frame"] = path
     mesh.update()
@@ -115,7 +123,9 @@ def _on_frame(scene, *_):
         folder = obj.get("sph_run")
         if not folder or obj.type != "MESH":
             continue
-        files = frames_of(folder)
+        files = frames_of(folder, obj.get("sph_prefix", "frame"))
+        if not files:
+            continue
         k = min(max(scene.frame_current - scene.frame_start, 0), len(files) - 1)
         if obj.data.get("sph_frame") != files[k]:
             load_frame(obj.data, files[k])
@@ -128,15 +138,29 @@ def register_handler():
     bpy.app.handlers.frame_change_pre.append(_on_frame)
 
 
+def _object(name, path):
+    mesh = bpy.data.meshes.new(name)
+    load_frame(mesh, path)
+    obj = bpy.data.objects.new(name, mesh)
+    bpy.context.scene.collection.objects.link(obj)
+    return obj
+
+
 def import_run(folder, name="sph_fluid"):
-    """Creates the animated point-cloud object of an sph-run output folder; returns it."""
+    """Creates the animated point-cloud object of an sph-run output folder (and, when the run
+    wrote them, "sph_boundary": the walls and obstacles, and "sph_boundary_moving": the moving
+    bodies, animated); returns the fluid's object."""
     folder = os.path.abspath(folder)
     files = frames_of(folder)
-    mesh = bpy.data.meshes.new(name)
-    load_frame(mesh, files[0])
-    obj = bpy.data.objects.new(name, mesh)
+    obj = _object(name, files[0])
     obj["sph_run"] = folder
-    bpy.context.scene.collection.objects.link(obj)
+    static = os.path.join(folder, "frames", "boundary.ply")
+    if os.path.exists(static):
+        _object("sph_boundary", static)
+    moving = frames_of(folder, "boundary_moving")
+    if moving:
+        m = _object("sph_boundary_moving", moving[0])
+        m["sph_run"], m["sph_prefix"] = folder, "boundary_moving"
     scene = bpy.context.scene
     scene.frame_end = scene.frame_start + len(files) - 1
     if len(files) > 1:
