@@ -50,7 +50,7 @@ obj = sph_import.import_run(out)
 scene = bpy.context.scene
 files = sph_import.frames_of(out)
 names = sorted(o.name for o in bpy.data.objects)
-moving = sph_import.frames_of(out, "boundary_moving")
+moving = sph_import.frames_of(out, "moving")
 if names != ["sph_boundary"] + (["sph_boundary_moving"] if moving else []) + ["sph_fluid"]:
     fail.append(f"objects {names}, expected the fluid (one for the whole run) and the boundary")
 else:

@@ -1,10 +1,10 @@
 """Opens an sph-run output folder in ParaView (pvbatch) the way a user does, through
-frames/frames.pvd, and checks what ParaView sees against the run's own records:
-  - the time steps are the .pvd's, the first 0, each equal to the t of a stats.csv row;
+frames.pvd, and checks what ParaView sees against the run's own records:
+  - the time steps are the .pvd's, the first 0, each the end (t + dt) of a stats.csv step (9 digits);
   - every frame has summary.json's fluid particle count, the arrays asked for, and ids
     0..N-1 in order (frames are written in id order, so point k is particle k in every frame);
   - each frame's TimeValue is its time step;
-  - frames/boundary.vtu holds every boundary particle (scenes without moving bodies) with normals.
+  - boundary/walls.vtu holds every boundary particle (scenes without moving bodies) with normals.
 Usage: pvbatch paraview_check.py OUT_DIR ARRAY[,ARRAY...]   (exit 1 with the reason on failure)"""
 import csv
 import json
@@ -18,7 +18,7 @@ out, arrays = sys.argv[1], sys.argv[2].split(",")
 summary = json.load(open(f"{out}/summary.json"))
 # the end of each step (stats.csv's t is the step's start), to the file's 9 digits
 rows = [0.0] + [float(r["t"]) + float(r["dt"]) for r in csv.DictReader(open(f"{out}/stats.csv"))]
-reader = PVDReader(FileName=f"{out}/frames/frames.pvd")
+reader = PVDReader(FileName=f"{out}/frames.pvd")
 times = list(reader.TimestepValues)
 fail = []
 if len(times) != summary["frames"]:
@@ -48,14 +48,14 @@ for t in times:
 # The walls, written once (a scene without moving bodies: all of its boundary particles).
 import os
 from paraview.simple import XMLUnstructuredGridReader
-bfile = f"{out}/frames/boundary.vtu"
+bfile = f"{out}/boundary/walls.vtu"
 if not os.path.exists(bfile):
-    fail.append("no frames/boundary.vtu")
+    fail.append("no boundary/walls.vtu")
 else:
     b = servermanager.Fetch(XMLUnstructuredGridReader(FileName=[bfile]))
     bnames = [b.GetPointData().GetArrayName(i) for i in range(b.GetPointData().GetNumberOfArrays())]
     if b.GetNumberOfPoints() != summary["boundary_particles"] or "normal" not in bnames:
-        fail.append(f"boundary.vtu: {b.GetNumberOfPoints()} points (summary {summary['boundary_particles']}), "
+        fail.append(f"walls.vtu: {b.GetNumberOfPoints()} points (summary {summary['boundary_particles']}), "
                     f"arrays {bnames}")
 print(f"ParaView read {len(times)} time steps of {summary['fluid_particles']} points: "
       + ("ok" if not fail else "FAILED"))

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # ParaView (Debian's pvbatch, headless under xvfb-run) opens an sph-run output folder through
-# frames/frames.pvd: times, point counts, arrays and id order (tests/paraview_check.py); also
+# frames.pvd: times, point counts, arrays and id order (tests/paraview_check.py); also
 # after the run is resumed from a checkpoint into its own folder (the .pvd keeps the frames
 # before the checkpoint with their times).
 # Needs: tools/install_deps.sh --test (paraview, python3-paraview, xvfb).
@@ -13,11 +13,11 @@ fail=0
 "$run" "$src/scenes/dam_break.json" --end 0.2 --out "$tmp/run" -q --checkpoint-every 0.07 \
   --set 'output.attributes=["velocity","density","pressure"]' || fail=1
 xvfb-run -a pvbatch "$src/tests/paraview_check.py" "$tmp/run" velocity,density,pressure || fail=1
-cp "$tmp/run/frames/frames.pvd" "$tmp/whole.pvd"
+cp "$tmp/run/frames.pvd" "$tmp/whole.pvd"
 ck=$(ls "$tmp/run/checkpoints/"*.sphckpt | head -2 | tail -1)  # the one after 0.14 s
 "$run" --resume "$ck" -q || fail=1
 xvfb-run -a pvbatch "$src/tests/paraview_check.py" "$tmp/run" velocity,density,pressure || fail=1
-cmp -s "$tmp/whole.pvd" "$tmp/run/frames/frames.pvd" || { echo "FAIL: the resumed run's frames.pvd differs"; fail=1; }
+cmp -s "$tmp/whole.pvd" "$tmp/run/frames.pvd" || { echo "FAIL: the resumed run's frames.pvd differs"; fail=1; }
 # individual stepping: its dt and active arrays
 "$run" "$src/scenes/dam_break.json" --mode individual --end 0.1 --out "$tmp/ind" -q || fail=1
 xvfb-run -a pvbatch "$src/tests/paraview_check.py" "$tmp/ind" velocity,density,pressure,dt,active || fail=1

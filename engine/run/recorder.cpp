@@ -73,9 +73,9 @@ Recorder::Recorder(std::filesystem::path dir, const Simulation& sim, const nlohm
     : m_dir(std::move(dir)), m_probes(sim.world().scene.probes) {
     std::filesystem::create_directories(m_dir);
     m_frame = st.at("frame").get<std::size_t>();
-    m_boundary_written = std::filesystem::exists(m_dir / "frames" / "boundary.vtu") ||
-                         std::filesystem::exists(m_dir / "frames" / "boundary.ply") ||
-                         std::filesystem::exists(m_dir / "frames" / "boundary.bgeo");
+    m_boundary_written = std::filesystem::exists(m_dir / "boundary" / "walls.vtu") ||
+                         std::filesystem::exists(m_dir / "boundary" / "walls.ply") ||
+                         std::filesystem::exists(m_dir / "boundary" / "walls.bgeo");
     if (const auto it = st.find("frame_times"); it != st.end()) {
         m_frame_times = it->get<std::vector<double>>();
     } else {  // a checkpoint of an earlier version: the nominal times
@@ -149,15 +149,16 @@ void Recorder::write_frame(const Simulation& sim) {
     char name[32];
     std::snprintf(name, sizeof name, "frame_%05zu", m_frame);
     sph::write_frame(m_dir / "frames" / name, w);
-    // The walls and obstacles once (frames/boundary.*), the moving bodies with every frame
-    // (frames/boundary_moving_NNNNN.*), so a render shows them beside the fluid.
+    // The walls and obstacles once (boundary/walls.*), the moving bodies with every frame
+    // (boundary/moving_NNNNN.*), so a render shows them beside the fluid; frames/ holds only
+    // the fluid's frames.
     if (w.static_boundary_end > 0 && !m_boundary_written) {
-        write_boundary(m_dir / "frames" / "boundary", w, 0, w.static_boundary_end, 0.0);  // it never moves
+        write_boundary(m_dir / "boundary" / "walls", w, 0, w.static_boundary_end, 0.0);  // it never moves
         m_boundary_written = true;
     }
     if (w.boundary.size() > w.static_boundary_end) {
-        std::snprintf(name, sizeof name, "boundary_moving_%05zu", m_frame);
-        write_boundary(m_dir / "frames" / name, w, w.static_boundary_end, w.boundary.size(), sim.time());
+        std::snprintf(name, sizeof name, "moving_%05zu", m_frame);
+        write_boundary(m_dir / "boundary" / name, w, w.static_boundary_end, w.boundary.size(), sim.time());
     }
     m_frame_times.push_back(sim.time());
     ++m_frame;
@@ -179,15 +180,15 @@ void Recorder::write_collection(const World& w) const {
           << std::setprecision(17);
         for (std::size_t k = 0; k < m_frame_times.size(); ++k) {
             char name[48];
-            std::snprintf(name, sizeof name, "%s_%05zu.vtu", stem, k);
+            std::snprintf(name, sizeof name, "%s_%05zu.vtu", stem, k);  // relative to the run folder
             x << "    <DataSet timestep=\"" << m_frame_times[k] << "\" group=\"\" part=\"0\" file=\"" << name
               << "\"/>\n";
         }
         x << "  </Collection>\n</VTKFile>\n";
-        write_file_atomic(m_dir / "frames" / file, x.str());
+        write_file_atomic(m_dir / file, x.str());
     };
-    collection("frame", "frames.pvd");
-    if (w.boundary.size() > w.static_boundary_end) collection("boundary_moving", "boundary_moving.pvd");
+    collection("frames/frame", "frames.pvd");
+    if (w.boundary.size() > w.static_boundary_end) collection("boundary/moving", "boundary_moving.pvd");
 }
 
 void Recorder::after_step(const Simulation& sim) {

@@ -51,7 +51,7 @@ public:
 private:
     std::string m_interrupted;  ///< why the run stopped early ("" when it reached its end)
     void write_frame(const Simulation& sim);
-    /// frames/frames.pvd: every .vtu frame so far with its simulated time (ParaView).
+    /// frames.pvd (and boundary_moving.pvd): every .vtu frame so far with its simulated time (ParaView).
     void write_collection(const World& w) const;
     std::string header(const Simulation& sim) const;
 

@@ -6,7 +6,8 @@
 ///   - a marker, <dir>/run.json (run id, scene, pid, start time), naming the run whose outputs
 ///     the folder holds.
 /// A fresh run into a folder that holds the outputs of an earlier marked run removes them
-/// first (stats.csv, summary.json, frames/, probes/, checkpoints/); outputs without a marker
+/// first (stats.csv, summary.json, frames/, boundary/, the .pvd files, probes/, checkpoints/);
+/// outputs without a marker
 /// (another program's, or an older sph-run's) are replaced only with `force`. A resumed run
 /// must find its own run's marker (or none).
 #include <filesystem>

@@ -61,10 +61,12 @@ def read_ply(path):
 
 
 def frames_of(folder, prefix="frame"):
-    """The PLY files prefix_NNNNN.ply of an output folder's frames/, in frame order (prefix
-    "frame": the fluid; "boundary_moving": the moving bodies)."""
-    d = os.path.join(folder, "frames")
+    """The PLY files of an output folder in frame order: frames/frame_NNNNN.ply (prefix "frame",
+    the fluid) or boundary/moving_NNNNN.ply (prefix "moving", the moving bodies)."""
+    d = os.path.join(folder, "frames" if prefix == "frame" else "boundary")
     if not os.path.isdir(d):
+        if prefix != "frame":
+            return []
         raise FileNotFoundError(f"{folder}: no frames/ folder (is this an sph-run output folder?)")
     pattern = _numbered(prefix)
     files = sorted(f for f in os.listdir(d) if pattern.search(f))
@@ -154,13 +156,13 @@ def import_run(folder, name="sph_fluid"):
     files = frames_of(folder)
     obj = _object(name, files[0])
     obj["sph_run"] = folder
-    static = os.path.join(folder, "frames", "boundary.ply")
+    static = os.path.join(folder, "boundary", "walls.ply")
     if os.path.exists(static):
         _object("sph_boundary", static)
-    moving = frames_of(folder, "boundary_moving")
+    moving = frames_of(folder, "moving")
     if moving:
         m = _object("sph_boundary_moving", moving[0])
-        m["sph_run"], m["sph_prefix"] = folder, "boundary_moving"
+        m["sph_run"], m["sph_prefix"] = folder, "moving"
     scene = bpy.context.scene
     scene.frame_end = scene.frame_start + len(files) - 1
     if len(files) > 1:
