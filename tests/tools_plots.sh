@@ -179,5 +179,12 @@ printf 'step,t,dt\n0,0,0.001\n' >"$tmp/old.csv"
 check "stats.csv without active_fraction exits 2 naming the column (got $rc)" \
   '[ $rc -eq 2 ] && grep -q "old.csv: missing column(s) active_fraction" "$tmp/err5"'
 
+# A Python without numpy (here Debian's with its site packages off, -S): the tool says which
+# Debian package to install, exit 2 (before: a ModuleNotFoundError traceback). Another
+# interpreter first on PATH (pyenv, conda) instead runs the tool again with /usr/bin/python3.
+/usr/bin/python3 -S "$src/tools/plot_dt.py" "$tmp/old.csv" 2>"$tmp/err6"; rc=$?
+check "no numpy: exit 2 naming python3-numpy (got $rc)" \
+  '[ $rc -eq 2 ] && grep -q "plot_dt.py: needs numpy, .*apt-get install python3-numpy" "$tmp/err6" && ! grep -q Traceback "$tmp/err6"'
+
 [ $fail -eq 0 ] && echo "tools plots: all checks passed"
 exit $fail

@@ -19,7 +19,10 @@ import json
 import pathlib
 import sys
 
-import numpy as np
+from sph_python import need  # noqa: E402 (tools/ is the script's folder)
+
+need("numpy")
+import numpy as np  # noqa: E402
 
 REQUIRED = ("step", "t", "dt", "active_fraction")
 

@@ -23,7 +23,10 @@ import argparse
 import pathlib
 import sys
 
-import numpy as np
+from sph_python import need  # noqa: E402 (tools/ is the script's folder)
+
+need("numpy")
+import numpy as np  # noqa: E402
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 from sph_vtu import VtuError, frame_files, read_vtu  # noqa: E402

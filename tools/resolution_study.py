@@ -38,7 +38,10 @@ import subprocess
 import sys
 import time
 
-import numpy as np
+from sph_python import need  # noqa: E402 (tools/ is the script's folder)
+
+need("numpy")
+import numpy as np  # noqa: E402
 
 HERE = pathlib.Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))

@@ -54,7 +54,10 @@ import subprocess
 import sys
 import time
 
-import numpy as np
+from sph_python import need  # noqa: E402 (tools/ is the script's folder)
+
+need("numpy")
+import numpy as np  # noqa: E402
 
 TOP_KEYS = {"name", "description", "simulation", "domain", "fluid", "fluid_blocks", "boundaries", "output", "probes"}
 HERE = pathlib.Path(__file__).resolve().parent

@@ -12,7 +12,10 @@ Compressed or base64 data (other writers) is reported as unsupported, not guesse
 import pathlib
 import xml.etree.ElementTree as ET
 
-import numpy as np
+from sph_python import need  # noqa: E402 (tools/ is the script's folder)
+
+need("numpy")
+import numpy as np  # noqa: E402
 
 _TYPES = {"Int8": "i1", "UInt8": "u1", "Int16": "i2", "UInt16": "u2", "Int32": "i4", "UInt32": "u4",
           "Int64": "i8", "UInt64": "u8", "Float32": "f4", "Float64": "f8"}
