@@ -98,6 +98,9 @@ check "--set before the scene path takes one value (exit $rc; before: the scene 
 "$run" "$scene" --end 0.1 --frame-rate 20 --format ply,vtu --out habits2 >h2 2>&1; rc=$?
 check "--frame-rate and --format (exit $rc)" '[ $rc -eq 0 ] && [ -s habits2/frames/frame_00002.ply ] && [ -s habits2/frames/frame_00002.vtu ] && [ ! -e habits2/frames/frame_00003.ply ]'
 check "the last line says how many frames of which formats went where" 'grep -q "wrote 3 frame(s) (ply, vtu) to habits2/frames" h2'
+python3 -c "import json,sys; d=json.load(open(sys.argv[1])); d['simulation']['end_time']='abc'; json.dump(d, open('abc.json','w'))" "$scene"
+"$run" abc.json --end 0.01 --out abc -q 2>e10; rc=$?
+check "a scene value --end replaces is still checked (exit 2; before: ran, exit 0; got $rc)" '[ $rc -eq 2 ] && grep -q "abc.json: /simulation/end_time: found \"abc\".*the file.s own value must be valid too" e10 && [ ! -e abc ]'
 help=$("$run" --help)
 check "--help lists the exit codes and the output layout" '[[ "$help" == *"5 an output could not be written"* && "$help" == *"run.json"* && "$help" == *"--format"* ]]'
 

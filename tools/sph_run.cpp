@@ -112,6 +112,26 @@ void check_memory(const sph::Scene& scene, const std::string& file,
     throw sph::SceneError(file, "/fluid/particle_radius", nlohmann::json(scene.fluid.particle_radius).dump(), expected);
 }
 
+/// A scene value a command-line option replaces must still be valid in the file itself
+/// (`"end_time": "abc"` with `--end 1` is a broken scene that would fail the next run without
+/// the option): the file is read once more without the overrides, and an error at an overridden
+/// path (or below it) is reported; errors elsewhere belong to a scene meant to be completed on
+/// the command line (a method's sections the override leaves unread, say) and are not.
+void check_replaced_values(const std::string& text, const std::string& file,
+                           const std::vector<std::pair<std::string, nlohmann::json>>& overrides) {
+    if (overrides.empty()) return;
+    try {
+        sph::parse_scene(text, file);
+    } catch (const sph::SceneError& e) {
+        for (const auto& [path, value] : overrides) {
+            const std::string& at = e.json_path();
+            if (at == path || (at.size() > path.size() && at.compare(0, path.size(), path) == 0 && at[path.size()] == '/'))
+                throw sph::InputError(std::string(e.what()) + " (in the scene file; the command line replaces it, but "
+                                                              "the file's own value must be valid too)");
+        }
+    }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -232,6 +252,7 @@ int main(int argc, char** argv) {
             return 0;
         }
         sph::Scene scene = sph::parse_scene(scene_text, scene_file, overrides);
+        check_replaced_values(scene_text, scene_file, overrides);
         scene.source = scene_file;
         check_memory(scene, scene_file, overrides);
         // The output folder is claimed before the (possibly long) set-up: a folder in use, a file
