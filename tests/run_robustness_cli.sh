@@ -101,6 +101,8 @@ check "the last line says how many frames of which formats went where" 'grep -q 
 python3 -c "import json,sys; d=json.load(open(sys.argv[1])); d['simulation']['end_time']='abc'; json.dump(d, open('abc.json','w'))" "$scene"
 "$run" abc.json --end 0.01 --out abc -q 2>e10; rc=$?
 check "a scene value --end replaces is still checked (exit 2; before: ran, exit 0; got $rc)" '[ $rc -eq 2 ] && grep -q "abc.json: /simulation/end_time: found \"abc\".*the file.s own value must be valid too" e10 && [ ! -e abc ]'
+"$run" "$src/scenes/glass.json" --set 'simulation.gravity=[0,-1e12,0]' --end 0.01 --out g -q 2>e11; rc=$?
+check "a step collapse before any particle exists names the scene's figures, no particle (exit 3; before: \"acceleration 0 m/s^2 at particle 0\"; got $rc)" '[ $rc -eq 3 ] && grep -q "from system .pcisph_dt. .*there is no fluid particle yet.*gravity 1e+12 m/s^2" e11 && ! grep -q "at particle" e11'
 help=$("$run" --help)
 check "--help lists the exit codes and the output layout" '[[ "$help" == *"5 an output could not be written"* && "$help" == *"run.json"* && "$help" == *"--format"* ]]'
 

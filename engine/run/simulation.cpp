@@ -205,9 +205,20 @@ void Simulation::check_step() {
         if (!(stable >= st.dt_min) || !std::isfinite(dt)) {
             std::ostringstream os;
             os << "time step collapsed at step " << w.clock.step << " (t = " << w.clock.t << " s): dt = " << stable
-               << " s from system '" << step_size_owner() << "' is below dt_min = " << st.dt_min
-               << " s; the largest acceleration, " << w.stats.a_max << " m/s^2, is at particle "
-               << w.stats.a_max_particle;
+               << " s from system '" << step_size_owner() << "' is below dt_min = " << st.dt_min << " s; ";
+            // What can limit a step, each with its own figure (a sound speed that is too high is
+            // not an acceleration problem, and with no particle there is no particle to name).
+            if (n == 0) {
+                os << "there is no fluid particle yet, so no particle's velocity or acceleration limits it: the "
+                      "scene's own figures do (gravity "
+                   << w.physics.gravity.norm() << " m/s^2, speed of sound " << w.physics.speed_of_sound
+                   << " m/s, h / c_s = " << w.physics.h / w.physics.speed_of_sound << " s)";
+            } else {
+                os << "the fastest particle moves at v_max = " << w.stats.v_max
+                   << " m/s, the largest acceleration is " << w.stats.a_max << " m/s^2 at particle "
+                   << w.stats.a_max_particle << ", the speed of sound is " << w.physics.speed_of_sound
+                   << " m/s (h / c_s = " << w.physics.h / w.physics.speed_of_sound << " s)";
+            }
             throw SimulationError(os.str(), w.stats.a_max_particle, w.clock.step, step_size_owner());
         }
         return;

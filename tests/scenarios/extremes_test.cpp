@@ -287,6 +287,11 @@ TEST(Extremes, CollapsingStepStopsWithDiagnosis) {
         const std::string what = e.what();
         EXPECT_NE(what.find("time step collapsed at step " + std::to_string(e.step())), std::string::npos) << what;
         EXPECT_NE(what.find("is below dt_min = 1e-05 s"), std::string::npos) << what;
+        // Every figure that can limit a step, each named (a sound speed too high is not
+        // blamed on an acceleration).
+        EXPECT_NE(what.find("the fastest particle moves at v_max = "), std::string::npos) << what;
+        EXPECT_NE(what.find(" m/s^2 at particle "), std::string::npos) << what;
+        EXPECT_NE(what.find("the speed of sound is "), std::string::npos) << what;
         EXPECT_LT(sim->world().step_size.dt_stable, 1e-5);
     }
 }
