@@ -101,6 +101,16 @@ void check_memory(const sph::Scene& scene, const std::string& file,
             std::snprintf(buf, sizeof buf, "%.3g", x);
         return std::string(buf);
     };
+    if (est.boundary_bytes > 0.5 * est.bytes && !scene.boundaries.empty()) {
+        // The boundary's sampling, not the fluid's, is what does not fit: name that boundary.
+        const std::string path = "/boundaries/" + std::to_string(est.largest_boundary);
+        throw sph::SceneError(file, path, "a boundary of about " + large(est.largest_boundary_particles, 0) +
+                                              " boundary particles at this radius",
+                              "a boundary that fits in memory: the boundaries would need about " +
+                                  large(est.boundary_bytes / (1024.0 * 1024.0 * 1024.0), 1) +
+                                  " GiB, more than this machine's physical memory (is a size or a position off "
+                                  "by a unit?)");
+    }
     std::string expected = "a larger radius: the scene would need about " +
                            large(est.bytes / (1024.0 * 1024.0 * 1024.0), 1) + " GiB for " +
                            large(est.fluid_particles, 0) + " fluid particles, more than this machine's physical memory";

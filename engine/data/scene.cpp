@@ -196,9 +196,19 @@ SizeEstimate estimate_size(const Scene& s) {
     SizeEstimate e;
     double area = 0.0;
     for (const FluidBlock& b : s.fluid_blocks) e.fluid_particles += lattice_count(b.box, spacing);
-    for (const BoundaryDesc& b : s.boundaries)
-        area += b.shape == BoundaryShape::Sphere ? 4.0 * std::numbers::pi * b.radius * b.radius : surface_area(b.box);
-    e.bytes = e.fluid_particles * 400.0 + area / (spacing * spacing) * 100.0;
+    for (std::size_t k = 0; k < s.boundaries.size(); ++k) {
+        const BoundaryDesc& b = s.boundaries[k];
+        const double a =
+            b.shape == BoundaryShape::Sphere ? 4.0 * std::numbers::pi * b.radius * b.radius : surface_area(b.box);
+        area += a;
+        if (a / (spacing * spacing) > e.largest_boundary_particles) {
+            e.largest_boundary = k;
+            e.largest_boundary_particles = a / (spacing * spacing);
+        }
+    }
+    e.boundary_particles = area / (spacing * spacing);
+    e.boundary_bytes = e.boundary_particles * 100.0;
+    e.bytes = e.fluid_particles * 400.0 + e.boundary_bytes;
     return e;
 }
 

@@ -264,7 +264,11 @@ bool has_moving_boundaries(const Scene& scene);
 /// spacing 2 r on the boundary surfaces).
 struct SizeEstimate {
     double fluid_particles = 0;
+    double boundary_particles = 0;
     double bytes = 0;
+    double boundary_bytes = 0;                  ///< the boundary's part of `bytes`
+    std::size_t largest_boundary = 0;           ///< index in Scene::boundaries of the largest
+    double largest_boundary_particles = 0;
 };
 SizeEstimate estimate_size(const Scene& scene);
 
