@@ -331,6 +331,7 @@ int main(int argc, char** argv) {
             char name[48];
             std::snprintf(name, sizeof name, "checkpoint_%06lld.sphckpt", static_cast<long long>(s.steps()));
             sph::write_checkpoint(out / "checkpoints" / name, s, meta);
+            return out / "checkpoints" / name;
         };
 
         const bool tty = ::isatty(STDERR_FILENO);
@@ -370,12 +371,7 @@ int main(int argc, char** argv) {
         if (stop_signal) {
             const char* name = stop_signal == SIGINT ? "SIGINT" : stop_signal == SIGTERM ? "SIGTERM" : "a signal";
             recorder->set_interrupted(name);
-            if (checkpoint_every > 0) {
-                write_checkpoint(*sim);
-                char file[48];
-                std::snprintf(file, sizeof file, "checkpoint_%06lld.sphckpt", static_cast<long long>(sim->steps()));
-                resume_hint = "; continue with: sph-run --resume " + (out / "checkpoints" / file).string();
-            }
+            if (checkpoint_every > 0) resume_hint = "; continue with: sph-run --resume " + write_checkpoint(*sim).string();
         }
         const auto summary = recorder->finish(*sim, wall, nthreads);
         if (stop_signal) {
