@@ -54,7 +54,10 @@ import subprocess
 import sys
 import time
 
-from sph_python import need  # noqa: E402 (tools/ is the script's folder)
+# sph_python.py sits beside this file (tools/, or build/tools/ beside sph-study); put that folder
+# first on the path so that loading this file as a module (tools that import it, the tests) finds it too.
+sys.path.insert(0, os.path.dirname(os.path.realpath(__file__)))
+from sph_python import need  # noqa: E402
 
 need("numpy")
 import numpy as np  # noqa: E402
