@@ -4,6 +4,7 @@
 set -euo pipefail
 PACKAGES=(build-essential cmake libtbb-dev libeigen3-dev libspdlog-dev nlohmann-json3-dev libcli11-dev
           libgtest-dev libgmock-dev libbenchmark-dev libpng-dev libhwy-dev python3 python3-numpy python3-matplotlib
+          libopenvdb-dev libboost-iostreams-dev  # OpenVDB (its find module also asks for Boost.Iostreams)
           clang libclang-rt-14-dev)  # clang + its runtime: libFuzzer for tools/fuzz.sh
 # --test: also the programs the tests open the outputs with (ParaView's pvbatch, headless
 # under xvfb-run, and Blender).

@@ -66,6 +66,8 @@ Outputs (in --out, default out/<scene name>):
   run.json                  the run that owns the folder (id, scene, pid); .sph-run.lock while it runs
   stats.csv                 one row per step; summary.json at the end (also when stopped early)
   frames/frame_NNNNN.EXT    particle frames, EXT per output.format (vtu, bgeo, ply); --no-frames for none
+  surface/surface_NNNNN.EXT the fluid surface: .vdb level set (format vdb), .ply mesh (format mesh)
+  boundary/                 walls.EXT once, moving_NNNNN.EXT per frame; frames.pvd for ParaView
   probes/<name>.csv         the scene's probes; checkpoints/ with --checkpoint-every
   A fresh run replaces the outputs of an earlier run in its folder; outputs no run.json claims
   are replaced only with --force.
@@ -171,7 +173,7 @@ int main(int argc, char** argv) {
         ->allow_extra_args(false);
     app.add_flag("--no-frames", no_frames, "Write no particle frames");
     app.add_option("--frame-rate", frame_rate, "Frames per simulated second (overrides simulation.frame_rate; 0: none)");
-    app.add_option("--format", formats, "Frame formats, comma-separated: vtu,bgeo,ply (overrides output.format)");
+    app.add_option("--format", formats, "Frame formats, comma-separated: vtu,bgeo,ply (particles), vdb,mesh (surface) (overrides output.format)");
     app.add_flag("--force", force, "Replace outputs in --out that no sph-run run claims (or another run's, resuming)");
     app.footer(kHelpFooter);
     app.add_option("--checkpoint-every", checkpoint_every,
@@ -391,8 +393,17 @@ int main(int argc, char** argv) {
                          100.0 * s["share"].get<double>());
         std::string fmts;
         for (const auto f : scene.output.formats) fmts += std::string(fmts.empty() ? "" : ", ") + sph::to_string(f);
+        const bool surfaces = std::any_of(scene.output.formats.begin(), scene.output.formats.end(),
+                                          [](sph::FrameFormat f) { return !sph::is_particle_format(f); });
+        const bool particles = std::any_of(scene.output.formats.begin(), scene.output.formats.end(),
+                                           sph::is_particle_format);
+        std::string where = particles ? (out / "frames").string() : "";
+        if (surfaces) where += (where.empty() ? "" : " and ") + (out / "surface").string();
         spdlog::info("wrote {} frame(s) ({}) to {}, stats.csv and summary.json to {}", recorder->frames_written(),
-                     recorder->frames_written() ? fmts : "none", (out / "frames").string(), out.string());
+                     recorder->frames_written() ? fmts : "none", where, out.string());
+        if (const auto it = summary.find("surface"); it != summary.end())
+            spdlog::info("surfaces: {:.3f} s per frame, {:.1f} steps' worth", (*it)["seconds_per_frame"].get<double>(),
+                         (*it)["steps_per_frame"].get<double>());
         return 0;
     } catch (const sph::InputError& e) {
         std::fprintf(stderr, "sph-run: error: %s\n", e.what());

@@ -126,6 +126,10 @@ const char* to_string(FrameFormat f) {
             return "bgeo";
         case FrameFormat::Ply:
             return "ply";
+        case FrameFormat::Vdb:
+            return "vdb";
+        case FrameFormat::Mesh:
+            return "mesh";
     }
     return "unknown";
 }

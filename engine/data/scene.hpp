@@ -208,13 +208,35 @@ struct EmitterDesc {
 /// the given spacing (2 r) over its disc, normal to its velocity (at most 2001 per row).
 std::vector<Vec3d> emitter_disc(const EmitterDesc& e, double spacing);
 
-/// @brief Particle frame formats: VTK .vtu (ParaView), Houdini classic .bgeo (partio),
-/// binary .ply (Blender).
-enum class FrameFormat { Vtu, Bgeo, Ply };
+/// @brief Frame formats: particles as VTK .vtu (ParaView), Houdini classic .bgeo (partio) or
+/// binary .ply (Blender); the fluid surface as an OpenVDB level set (.vdb) or a triangle mesh
+/// (binary .ply), both built from one level set per frame (engine/run/surface.hpp).
+enum class FrameFormat { Vtu, Bgeo, Ply, Vdb, Mesh };
 const char* to_string(FrameFormat f);
+/// @brief True for the formats that write particles (vtu, bgeo, ply).
+constexpr bool is_particle_format(FrameFormat f) { return f == FrameFormat::Vtu || f == FrameFormat::Bgeo || f == FrameFormat::Ply; }
+
+/// @brief How the fluid surface is built (`output.surface`, metres). Unset values follow the
+/// particle radius r, so a scene keeps its look when `simulation.scale` refines it.
+struct SurfaceParams {
+    std::optional<double> voxel_size;     ///< level-set voxel edge; default r (half the spacing)
+    std::optional<double> sphere_radius;  ///< radius of each particle's sphere; default 3 r (1.5 spacings)
+    std::optional<double> smoothing;      ///< Gaussian filter width; default r; 0: none
+    /// Offset the surface so it encloses the particles' volume N (2 r)³ (what the fluid holds).
+    bool keep_volume = true;
+    /// The values used for particle radius r (the defaults filled in).
+    struct Resolved {
+        double voxel_size, sphere_radius, smoothing;
+        bool keep_volume;
+    };
+    Resolved resolve(double r) const {
+        return {voxel_size.value_or(r), sphere_radius.value_or(3.0 * r), smoothing.value_or(r), keep_volume};
+    }
+};
 
 struct OutputParams {
     std::vector<FrameFormat> formats{FrameFormat::Vtu};
+    SurfaceParams surface;
     /// Particle attributes written per frame, besides position and id (always written): any
     /// of "position", "velocity", "density", "pressure", "acceleration", "dt", "active", "bin".
     std::vector<std::string> attributes{"velocity", "density", "pressure"};

@@ -52,7 +52,8 @@ inline constexpr std::array<const char*, 5> k_sinusoidal_motion_keys{"type", "ax
 inline constexpr std::array<const char*, 4> k_path_motion_keys{"type", "points", "speed", "loop"};
 inline constexpr std::array<const char*, 5> k_circle_motion_keys{"type", "center", "radius", "axis",
                                                           "speed"};
-inline constexpr std::array<const char*, 2> k_output_keys{"format", "attributes"};
+inline constexpr std::array<const char*, 3> k_output_keys{"format", "attributes", "surface"};
+inline constexpr std::array<const char*, 4> k_surface_keys{"voxel_size", "sphere_radius", "smoothing", "keep_volume"};
 
 inline constexpr const char* k_name_expected =
     "a non-empty string without \"/\" (it names the output folder)";
@@ -71,8 +72,8 @@ inline constexpr std::array<BoundaryShape, 6> k_shapes{BoundaryShape::Container,
                                                 BoundaryShape::Heightfield, BoundaryShape::Mesh};
 inline constexpr std::array<MotionType, 4> k_motion_types{MotionType::Linear, MotionType::Sinusoidal,
                                                   MotionType::Path, MotionType::Circle};
-inline constexpr std::array<FrameFormat, 3> k_formats{FrameFormat::Vtu, FrameFormat::Bgeo,
-                                              FrameFormat::Ply};
+inline constexpr std::array<FrameFormat, 5> k_formats{FrameFormat::Vtu, FrameFormat::Bgeo, FrameFormat::Ply,
+                                                      FrameFormat::Vdb, FrameFormat::Mesh};
 inline constexpr std::array<const char*, 8> k_attributes{"position", "velocity", "density", "pressure",
                                                   "acceleration", "dt",       "active",  "bin"};
 

@@ -803,6 +803,22 @@ class Reader {
                 p.formats.push_back(pick_enum(f, k_formats));
             }
         }
+        if (const json* v = n.find("surface")) {
+            const Node sn = n.at(*v, "surface");
+            require_object(sn, "an object");
+            check_keys(sn, k_surface_keys);
+            const auto read = [&](const char* key, const Range& range, std::optional<double>& out) {
+                if (const json* x = sn.find(key)) out = number(sn.at(*x, key), range);
+            };
+            read("voxel_size", positive("metres"), p.surface.voxel_size);
+            read("sphere_radius", positive("metres"), p.surface.sphere_radius);
+            read("smoothing", non_negative("metres, the Gaussian filter's width; 0 smooths nothing"),
+                 p.surface.smoothing);
+            if (const json* x = sn.find("keep_volume")) {
+                if (!x->is_boolean()) fail(child(sn.path, "keep_volume"), dump(*x), "true or false");
+                p.surface.keep_volume = x->get<bool>();
+            }
+        }
         if (const json* v = n.find("attributes")) {
             const Node a = n.at(*v, "attributes");
             require_array(a,
@@ -830,6 +846,7 @@ class Reader {
         }
         const double spacing = 2.0 * s.particle_radius();
         const std::string radius_path = "/fluid/particle_radius", scale_path = "/simulation/scale";
+        check_surface(s);
         // A moving boundary is checked where it is at t = 0 (a sinusoid with a phase starts
         // displaced); every other motion starts at its declared geometry.
         std::vector<BoundaryDesc> at_start;
@@ -934,6 +951,33 @@ class Reader {
                             {path, bpath, radius_path});
                 }
             }
+        }
+    }
+
+    // The surface's sizes against the particle radius r (after scale): a voxel of at least r/8
+    // (the level set's memory grows as its inverse square), a sphere of at least r and 1.5
+    // voxels (OpenVDB's rasteriser skips smaller ones), a filter at most 4 spheres wide.
+    void check_surface(const Scene& s) const {
+        const double r = s.particle_radius();
+        const SurfaceParams::Resolved v = s.output.surface.resolve(r);
+        const std::string base = "/output/surface/", radius_path = "/fluid/particle_radius",
+                          scale_path = "/simulation/scale";
+        const auto at = [&](const char* key) { return base + key; };
+        if (v.voxel_size < r / 8) {
+            fail_at(at("voxel_size"), fmt_computed(v.voxel_size),
+                    "a voxel of at least the particle radius / 8 = " + fmt_computed(r / 8) + " m",
+                    {at("voxel_size"), radius_path, scale_path});
+        }
+        if (v.sphere_radius < std::max(r, 1.5 * v.voxel_size)) {
+            fail_at(at("sphere_radius"), fmt_computed(v.sphere_radius),
+                    "a sphere radius of at least the particle radius and 1.5 voxels = " +
+                        fmt_computed(std::max(r, 1.5 * v.voxel_size)) + " m",
+                    {at("sphere_radius"), at("voxel_size"), radius_path, scale_path});
+        }
+        if (v.smoothing > 4 * v.sphere_radius) {
+            fail_at(at("smoothing"), fmt_computed(v.smoothing),
+                    "a filter at most 4 sphere radii = " + fmt_computed(4 * v.sphere_radius) + " m wide",
+                    {at("smoothing"), at("sphere_radius"), radius_path, scale_path});
         }
     }
 

@@ -27,14 +27,12 @@ std::string errno_text() { return std::strerror(errno); }
 
 std::atomic<std::uint64_t> g_tmp_counter{0};
 
-/// A short hidden name beside the target, whatever the target's length (a name near the file
-/// system's 255-byte limit plus a suffix would not fit).
+}  // namespace
+
 std::filesystem::path temporary_name(const std::filesystem::path& target) {
     return target.parent_path() /
            (".sph.tmp" + std::to_string(::getpid()) + "." + std::to_string(g_tmp_counter++));
 }
-
-}  // namespace
 
 AtomicFile::AtomicFile(std::filesystem::path target) : m_target(std::move(target)) {
     if (m_target.has_parent_path()) {
@@ -417,6 +415,8 @@ void write_arrays(const std::filesystem::path& stem, const std::vector<FrameArra
             case FrameFormat::Vtu: write_file_atomic(stem.string() + ".vtu", vtu_text(arrays, t)); break;
             case FrameFormat::Bgeo: write_file_atomic(stem.string() + ".bgeo", bgeo_text(arrays)); break;
             case FrameFormat::Ply: write_file_atomic(stem.string() + ".ply", ply_text(arrays, t)); break;
+            case FrameFormat::Vdb:
+            case FrameFormat::Mesh: break;  // the surface formats: the recorder builds them (surface.hpp)
         }
     }
 }
@@ -448,7 +448,12 @@ void write_boundary(const std::filesystem::path& stem, const World& world, std::
     std::vector<std::uint32_t> index(end - begin);
     for (std::size_t i = 0; i < index.size(); ++i) index[i] = std::uint32_t(begin + i);
     arrays.push_back(make_array("id", index.data(), index.size(), 1));
-    write_arrays(stem, arrays, world.scene.output.formats, t);
+    // In the scene's particle formats; as .ply when it asks for surfaces only.
+    std::vector<FrameFormat> formats;
+    for (const FrameFormat f : world.scene.output.formats)
+        if (is_particle_format(f)) formats.push_back(f);
+    if (formats.empty()) formats.push_back(FrameFormat::Ply);
+    write_arrays(stem, arrays, formats, t);
 }
 
 void write_frame(const std::filesystem::path& stem, const World& world) {

@@ -36,6 +36,11 @@ private:
     bool m_unnamed = false;
 };
 
+/// @brief A short hidden name beside `target` (".sph.tmp<pid>.<n>"), unique in this process,
+/// whatever the target's length (a name near the file system's 255-byte limit plus a suffix
+/// would not fit), for writers that must name their temporary file (then rename it).
+std::filesystem::path temporary_name(const std::filesystem::path& target);
+
 /// @brief Writes `content` to `file` atomically (an AtomicFile; no fsync).
 void write_file_atomic(const std::filesystem::path& file, std::string_view content);
 
@@ -68,7 +73,7 @@ void write_ply(const std::filesystem::path& file, const World& world,
 void write_frame(const std::filesystem::path& stem, const World& world);
 
 /// @brief Writes boundary particles [begin, end) as `stem`.vtu / .bgeo / .ply (the scene's
-/// formats): position, normal and (moving bodies) velocity, and `id` = the boundary row, so a
+/// particle formats; .ply when it has only surface formats): position, normal and (moving bodies) velocity, and `id` = the boundary row, so a
 /// render shows the tank, the obstacles and the paddle beside the fluid; `t` is the time the
 /// files carry.
 void write_boundary(const std::filesystem::path& stem, const World& world, std::size_t begin, std::size_t end,

@@ -15,6 +15,7 @@
 #include "engine/core/errors.hpp"
 #include "engine/graph/system.hpp"
 #include "engine/run/io.hpp"
+#include "engine/run/surface.hpp"
 
 namespace sph {
 
@@ -30,6 +31,14 @@ double front_x(const World& w) {
 }
 
 namespace {
+/// Refuses the surface formats before the run starts when this build has no OpenVDB.
+void check_surface_formats(const World& w) {
+    for (const FrameFormat f : w.scene.output.formats)
+        if ((f == FrameFormat::Vdb || f == FrameFormat::Mesh) && !surface_available())
+            throw InputError(std::string("output format \"") + to_string(f) +
+                             "\" needs OpenVDB: this build has SPH_WITH_OPENVDB=OFF (rebuild with it ON, or choose "
+                             "vtu, bgeo or ply)");
+}
 constexpr std::size_t kMaxPendingStats = std::size_t(4) << 20;  // bytes of rows held in memory
 }
 
@@ -64,6 +73,7 @@ std::string Recorder::header(const Simulation& sim) const {
 
 Recorder::Recorder(std::filesystem::path dir, const Simulation& sim)
     : m_dir(std::move(dir)), m_probes(sim.world().scene.probes) {
+    check_surface_formats(sim.world());
     std::filesystem::create_directories(m_dir);
     m_pending = header(sim);
     m_t0 = std::chrono::steady_clock::now();
@@ -71,6 +81,7 @@ Recorder::Recorder(std::filesystem::path dir, const Simulation& sim)
 
 Recorder::Recorder(std::filesystem::path dir, const Simulation& sim, const nlohmann::json& st)
     : m_dir(std::move(dir)), m_probes(sim.world().scene.probes) {
+    check_surface_formats(sim.world());
     std::filesystem::create_directories(m_dir);
     m_frame = st.at("frame").get<std::size_t>();
     m_boundary_written = std::filesystem::exists(m_dir / "boundary" / "walls.vtu") ||
@@ -148,7 +159,10 @@ void Recorder::write_frame(const Simulation& sim) {
     const World& w = sim.world();
     char name[32];
     std::snprintf(name, sizeof name, "frame_%05zu", m_frame);
-    sph::write_frame(m_dir / "frames" / name, w);
+    const auto& formats = w.scene.output.formats;
+    if (std::any_of(formats.begin(), formats.end(), is_particle_format)) sph::write_frame(m_dir / "frames" / name, w);
+    std::snprintf(name, sizeof name, "surface_%05zu", m_frame);
+    write_surface(w, name);
     // The walls and obstacles once (boundary/walls.*), the moving bodies with every frame
     // (boundary/moving_NNNNN.*), so a render shows them beside the fluid; frames/ holds only
     // the fluid's frames.
@@ -165,6 +179,20 @@ void Recorder::write_frame(const Simulation& sim) {
     write_collection(sim.world());
     m_next_frame_time = double(m_frame) / sim.world().scene.simulation.frame_rate;
     flush_stats();
+}
+
+void Recorder::write_surface(const World& w, const char* name) {
+    const auto& formats = w.scene.output.formats;
+    const bool vdb = std::find(formats.begin(), formats.end(), FrameFormat::Vdb) != formats.end();
+    const bool mesh = std::find(formats.begin(), formats.end(), FrameFormat::Mesh) != formats.end();
+    if (!vdb && !mesh) return;
+    const auto t0 = std::chrono::steady_clock::now();
+    const double r = w.physics.particle_radius;
+    const FluidSurface surface(w.fluid.store.get(comp::position), r, w.scene.output.surface.resolve(r));
+    if (vdb) surface.write_vdb(m_dir / "surface" / (std::string(name) + ".vdb"), w.clock.t);
+    if (mesh) write_mesh_ply(m_dir / "surface" / (std::string(name) + ".ply"), surface.mesh(), w.clock.t);
+    m_surface_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    ++m_surface_frames;
 }
 
 void Recorder::write_collection(const World& w) const {
@@ -312,6 +340,18 @@ nlohmann::json Recorder::finish(const Simulation& sim, double wall_seconds, int 
                     {"speed_of_sound", w.physics.speed_of_sound},
                     {"fluid_height", w.physics.fluid_height}};
     j["frames"] = m_frame;
+    if (m_surface_frames > 0) {
+        // The surface's cost per frame, also in steps of this run (an average step's time in
+        // the systems).
+        const double per_frame = m_surface_seconds / double(m_surface_frames);
+        double systems_s = 0;
+        for (std::size_t i = 0; i < g.systems().size(); ++i) systems_s += g.total_seconds(i);
+        const double per_step = sim.steps() ? systems_s / double(sim.steps()) : 0.0;
+        j["surface"] = {{"frames", m_surface_frames},
+                        {"seconds", m_surface_seconds},
+                        {"seconds_per_frame", per_frame},
+                        {"steps_per_frame", per_step > 0 ? per_frame / per_step : 0.0}};
+    }
     j["boundary_collisions_total"] = m_collisions;
     j["front_x_m"] = front_x(w);
     // The front at a quarter, half and three quarters of the end time (the first step ending

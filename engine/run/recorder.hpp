@@ -51,6 +51,10 @@ public:
 private:
     std::string m_interrupted;  ///< why the run stopped early ("" when it reached its end)
     void write_frame(const Simulation& sim);
+    /// surface/surface_NNNNN.vdb and/or .ply (formats vdb, mesh) from one level set.
+    void write_surface(const World& w, const char* name);
+    double m_surface_seconds = 0;      ///< wall time spent building and writing surfaces (this process)
+    std::uint64_t m_surface_frames = 0;  ///< surfaces built (this process)
     /// frames.pvd (and boundary_moving.pvd): every .vtu frame so far with its simulated time (ParaView).
     void write_collection(const World& w) const;
     std::string header(const Simulation& sim) const;
