@@ -9,7 +9,12 @@ Blender holds against the PLY files, read here independently (struct, no numpy):
     density and pressure float attributes; density within 5 % of the rest density (after
     frame 0, which is written before the first density evaluation);
   - up is +Z: the fluid rests on z >= 0 at frame 0 and (dam_break) falls, mean velocity z < 0,
-    at the last.
+    at the last;
+  - the surface, when the run wrote it: "sph_surface" holds at each checked frame that frame's
+    mesh PLY (vertex and triangle counts, a vertex at (x, -z, y)); Blender's own bmesh finds every
+    edge manifold and an enclosed volume within 1 % of the particles' N (2 r)^3 (the importer and
+    the engine's keep_volume together: measured 0.2 % on dam_break); "sph_surface_volume" loads
+    that frame's .vdb with its level-set grid "surface".
 Exit 1 with the reasons on any failure."""
 import importlib.util
 import json
@@ -17,6 +22,7 @@ import os
 import struct
 import sys
 
+import bmesh
 import bpy
 
 importer, out = sys.argv[sys.argv.index("--") + 1:][:2]
@@ -51,7 +57,10 @@ scene = bpy.context.scene
 files = sph_import.frames_of(out)
 names = sorted(o.name for o in bpy.data.objects)
 moving = sph_import.frames_of(out, "moving")
-if names != ["sph_boundary"] + (["sph_boundary_moving"] if moving else []) + ["sph_fluid"]:
+surfaces, volumes = sph_import.frames_of(out, "surface"), sph_import.frames_of(out, "surface", "vdb")
+expected = (["sph_boundary"] + (["sph_boundary_moving"] if moving else []) + ["sph_fluid"] +
+            (["sph_surface"] if surfaces else []) + (["sph_surface_volume"] if volumes else []))
+if names != expected:
     fail.append(f"objects {names}, expected the fluid (one for the whole run) and the boundary")
 else:
     b = bpy.data.objects["sph_boundary"].data
@@ -98,6 +107,40 @@ for k in sorted({0, len(files) // 2, len(files) - 1}):
         vz = sum(d.vector.z for d in mesh.attributes["velocity"].data) / n
         if not vz < 0:
             fail.append(f"frame {k}: mean velocity z = {vz}, expected the column falling (< 0)")
+fluid_volume = n_fluid * (2 * summary["physics"]["particle_radius"]) ** 3
+for k in sorted({0, len(surfaces) // 2, len(surfaces) - 1}) if surfaces else []:
+    scene.frame_set(scene.frame_start + k)
+    mesh = bpy.data.objects["sph_surface"].data
+    with open(surfaces[k], "rb") as f:
+        data = f.read()
+    body_at = data.index(b"end_header\n") + len(b"end_header\n")
+    head = data[:body_at].decode("ascii").split("\n")
+    nv = int(next(line for line in head if line.startswith("element vertex")).split()[2])
+    nf = int(next(line for line in head if line.startswith("element face")).split()[2])
+    x, y, z = struct.unpack_from("<3f", data, body_at)
+    if (len(mesh.vertices), len(mesh.polygons)) != (nv, nf):
+        fail.append(f"surface frame {k}: {len(mesh.vertices)} vertices, {len(mesh.polygons)} faces; the PLY has {nv}, {nf}")
+        continue
+    if max(abs(a - b) for a, b in zip(tuple(mesh.vertices[0].co), (x, -z, y))) > 1e-6:
+        fail.append(f"surface frame {k}: vertex 0 at {tuple(mesh.vertices[0].co)}, the PLY (z-up) says {(x, -z, y)}")
+    bm = bmesh.new()
+    bm.from_mesh(mesh)
+    open_edges = sum(not e.is_manifold for e in bm.edges)
+    volume = bm.calc_volume(signed=True)
+    bm.free()
+    if open_edges or abs(volume / fluid_volume - 1) > 0.01:
+        fail.append(f"surface frame {k}: {open_edges} non-manifold edges, volume {volume:.6g} m3 against the "
+                    f"particles' {fluid_volume:.6g} (expected closed and within 1 %)")
+for k in sorted({0, len(volumes) - 1}) if volumes else []:
+    scene.frame_set(scene.frame_start + k)
+    vobj = bpy.data.objects["sph_surface_volume"]
+    grids = vobj.evaluated_get(bpy.context.evaluated_depsgraph_get()).data.grids
+    grids.load()
+    if os.path.basename(grids.frame_filepath) != os.path.basename(volumes[k]) or "surface" not in [g.name for g in grids]:
+        fail.append(f"volume frame {k}: Blender loaded '{grids.frame_filepath}' with grids "
+                    f"{[g.name for g in grids]}, expected {os.path.basename(volumes[k])} with 'surface'")
+if surfaces or volumes:
+    print(f"Blender imported {len(surfaces)} surface meshes and {len(volumes)} level sets")
 print(f"Blender imported {len(files)} frames of {n_fluid} particles as '{obj.name}': " + ("ok" if not fail else "FAILED"))
 for f in fail:
     print("FAIL:", f)

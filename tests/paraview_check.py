@@ -4,7 +4,9 @@ frames.pvd, and checks what ParaView sees against the run's own records:
   - every frame has summary.json's fluid particle count, the arrays asked for, and ids
     0..N-1 in order (frames are written in id order, so point k is particle k in every frame);
   - each frame's TimeValue is its time step;
-  - boundary/walls.vtu holds every boundary particle (scenes without moving bodies) with normals.
+  - boundary/walls.vtu holds every boundary particle (scenes without moving bodies) with normals;
+  - the surface meshes (surface/surface_NNNNN.ply, format "mesh"), opened as one file series:
+    one time step per frame, and each step's points and triangles are its file's.
 Usage: pvbatch paraview_check.py OUT_DIR ARRAY[,ARRAY...]   (exit 1 with the reason on failure)"""
 import csv
 import json
@@ -57,6 +59,25 @@ else:
     if b.GetNumberOfPoints() != summary["boundary_particles"] or "normal" not in bnames:
         fail.append(f"walls.vtu: {b.GetNumberOfPoints()} points (summary {summary['boundary_particles']}), "
                     f"arrays {bnames}")
+import glob
+from paraview.simple import PLYReader
+surfaces = sorted(glob.glob(f"{out}/surface/surface_*.ply"))
+if surfaces:
+    series = PLYReader(FileNames=surfaces)
+    steps = list(series.TimestepValues)
+    if len(steps) != len(surfaces) or len(surfaces) != summary["frames"]:
+        fail.append(f"the surface series: {len(steps)} time steps for {len(surfaces)} files, {summary['frames']} frames")
+    for k in sorted({0, len(surfaces) - 1}):
+        series.UpdatePipeline(steps[k] if steps else 0)
+        d = servermanager.Fetch(series)
+        with open(surfaces[k], "rb") as f:
+            head = f.read(1024).split(b"end_header")[0].decode("ascii").split("\n")
+        nv = int(next(line for line in head if line.startswith("element vertex")).split()[2])
+        nf = int(next(line for line in head if line.startswith("element face")).split()[2])
+        if (d.GetNumberOfPoints(), d.GetNumberOfCells()) != (nv, nf) or nf == 0:
+            fail.append(f"surface frame {k}: ParaView has {d.GetNumberOfPoints()} points, {d.GetNumberOfCells()} "
+                        f"cells; the file {nv}, {nf}")
+    print(f"ParaView read {len(surfaces)} surface meshes")
 print(f"ParaView read {len(times)} time steps of {summary['fluid_particles']} points: "
       + ("ok" if not fail else "FAILED"))
 for f in fail:

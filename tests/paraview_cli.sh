@@ -18,6 +18,11 @@ ck=$(ls "$tmp/run/checkpoints/"*.sphckpt | head -2 | tail -1)  # the one after 0
 "$run" --resume "$ck" -q || fail=1
 xvfb-run -a pvbatch "$src/tests/paraview_check.py" "$tmp/run" velocity,density,pressure || fail=1
 cmp -s "$tmp/whole.pvd" "$tmp/run/frames.pvd" || { echo "FAIL: the resumed run's frames.pvd differs"; fail=1; }
+# the surface meshes beside the particle frames
+"$run" "$src/scenes/dam_break.json" --end 0.1 --format vtu,mesh --out "$tmp/surf" -q || fail=1
+xvfb-run -a pvbatch "$src/tests/paraview_check.py" "$tmp/surf" velocity,density,pressure >"$tmp/surf.log" 2>&1 || fail=1
+cat "$tmp/surf.log"
+grep -q "^ParaView read 4 surface meshes" "$tmp/surf.log" || { echo "FAIL: ParaView did not read the 4 surface meshes"; fail=1; }
 # individual stepping: its dt and active arrays
 "$run" "$src/scenes/dam_break.json" --mode individual --end 0.1 --out "$tmp/ind" -q || fail=1
 xvfb-run -a pvbatch "$src/tests/paraview_check.py" "$tmp/ind" velocity,density,pressure,dt,active || fail=1

@@ -54,8 +54,8 @@ bool SurfaceMesh::watertight() const {
 void write_mesh_ply(const std::filesystem::path& file, const SurfaceMesh& mesh, double t) {
     char time_text[64];
     std::snprintf(time_text, sizeof time_text, "%.17g", t);
-    std::string out = "ply\nformat binary_little_endian 1.0\ncomment sph fluid surface, y up, metres\n"
-                      "comment time " + std::string(time_text) + "\nelement vertex " +
+    std::string out = "ply\nformat binary_little_endian 1.0\ncomment sph surface, t = " + std::string(time_text) +
+                      " s (y up, metres)\nelement vertex " +
                       std::to_string(mesh.vertices.size()) + "\nproperty float x\nproperty float y\n"
                       "property float z\nelement face " + std::to_string(mesh.triangles.size()) +
                       "\nproperty list uchar int vertex_indices\nend_header\n";

@@ -69,7 +69,7 @@ private:
 };
 
 /// @brief Writes a mesh as binary little-endian PLY (float x y z; uchar-counted int faces), the
-/// simulated time in a comment; atomic like every output.
+/// simulated time in a comment ("t = ...", as the particle frames); atomic like every output.
 void write_mesh_ply(const std::filesystem::path& file, const SurfaceMesh& mesh, double t);
 
 }  // namespace sph

@@ -116,7 +116,7 @@ TEST(Surface, PlyHoldsTheMesh) {
     const std::size_t end = all.find("end_header\n") + 11;
     EXPECT_NE(all.find("element vertex " + std::to_string(m.vertices.size()) + "\n"), std::string::npos);
     EXPECT_NE(all.find("element face " + std::to_string(m.triangles.size()) + "\n"), std::string::npos);
-    EXPECT_NE(all.find("comment time 0.25\n"), std::string::npos);
+    EXPECT_NE(all.find("comment sph surface, t = 0.25 s"), std::string::npos);
     ASSERT_EQ(all.size(), end + 12 * m.vertices.size() + 13 * m.triangles.size());
     // The last triangle, read back.
     const char* p = all.data() + all.size() - 13;
