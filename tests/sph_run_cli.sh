@@ -41,6 +41,15 @@ check "frames 0 and 1 in .vtu, .bgeo and .ply" 'for f in 00000 00001; do for e i
 check "PLY header lists the chosen attributes" 'head -c 400 "$tmp/fmt/frames/frame_00001.ply" | grep -a -q "property float velocity_x" && head -c 400 "$tmp/fmt/frames/frame_00001.ply" | grep -a -q "property double dt" && ! head -c 400 "$tmp/fmt/frames/frame_00001.ply" | grep -a -q density'
 check "BGEO starts with BgeoV" '[ "$(head -c 5 "$tmp/fmt/frames/frame_00001.bgeo")" = "BgeoV" ]'
 
+# 3b. The surface only (format mesh): surface/surface_NNNNN.ply per frame, no particle frames,
+# the walls as .ply (no particle format to follow), its cost in summary.json and the last line.
+"$run" "$src/scenes/dam_break.json" --end 0.04 --format mesh --out "$tmp/surf" >"$tmp/err_surf" 2>&1; rc=$?
+check "surface-only run exits 0 (got $rc)" '[ $rc -eq 0 ]'
+check "surface/surface_00000.ply and _00001.ply, no frames/" '[ -s "$tmp/surf/surface/surface_00000.ply" ] && [ -s "$tmp/surf/surface/surface_00001.ply" ] && [ ! -e "$tmp/surf/frames" ] && [ ! -e "$tmp/surf/frames.pvd" ]'
+check "walls as .ply" '[ -s "$tmp/surf/boundary/walls.ply" ]'
+check "summary.json has the surface cost" 'grep -q "\"seconds_per_frame\"" "$tmp/surf/summary.json"'
+check "last lines name surface/ and the cost per frame" 'grep -q "(mesh) to $tmp/surf/surface," "$tmp/err_surf" && grep -q "surfaces: .* s per frame" "$tmp/err_surf"'
+
 # 4. A particle leaving the domain: exit 3 naming the particle, the step and the system.
 "$run" "$src/tests/data/valid/falls_out.json" --out "$tmp/fall" 2>"$tmp/err4"; rc=$?
 check "leaving the domain exits 3 (got $rc)" '[ $rc -eq 3 ]'
