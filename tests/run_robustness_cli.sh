@@ -78,6 +78,29 @@ check "a 251-character probe name runs (the temporary file name no longer grows 
 "$run" "$scene" --end 0.01 -q --out p252 --set "probes=[{\"type\":\"front\",\"name\":\"p$long\",\"method\":\"neighbours\"}]" 2>e4; rc=$?
 check "a 252-character probe name: exit 2 naming the key (got $rc)" '[ $rc -eq 2 ] && grep -q "/probes/0/name" e4 && [ ! -e p252 ]'
 
+# 4b. A full disk (a tmpfs of 5.3 MiB; needs root, as CI runs): with --no-frames the run keeps its
+#    rows in memory and the first commit of 4 MiB fails. Before: exit 5 and an empty folder after
+#    the whole simulation. Now: what was computed is saved into the 5 MiB reserve the run made at
+#    its start: stats.csv to the failing step, summary.json marked output_failed, the probes.
+mkdir full && if mount -t tmpfs -o size=5400k tmpfs full 2>/dev/null; then
+  trap 'umount "$tmp/full" 2>/dev/null; chmod -R u+w "$tmp" 2>/dev/null; rm -rf "$tmp"' EXIT
+  "$run" "$scene" --scale 0.05 --end 25 --no-frames -q --out full/run 2>e_full; rc=$?
+  check "disk full: exit 5 naming the file and the reason (got $rc)" '[ $rc -eq 5 ] && grep -q "full/run/stats.csv: .*(No space left on device)" e_full'
+  check "disk full: the message lists what was saved" 'grep -q "saved before stopping: stats.csv: complete to t = " e_full && grep -q "saved before stopping: summary.json: written" e_full'
+  steps=$(json full/run/summary.json 's["steps"]' 2>/dev/null)
+  check "disk full: summary.json says output_failed at step $steps" '[ -n "$steps" ] && [ "$(json full/run/summary.json "s[\"output_failed\"][\"step\"]")" = "$steps" ]'
+  check "disk full: stats.csv holds every one of its $steps steps, whole rows" '[ $(( $(wc -l < full/run/stats.csv) - 1 )) -eq "$steps" ] && [ "$(tail -c 1 full/run/stats.csv | od -An -c | tr -d " ")" = "\n" ] && [ "$steps" -gt 15000 ]'
+  check "disk full: probes saved, no reserve or temporary file left" '[ -s full/run/probes/front.csv ] && [ ! -e full/run/.sph-reserve ] && [ -z "$(find full -name ".sph.tmp*")" ]'
+  rm -rf full/run
+  # Not even room for the reserve: refused before the simulation starts, the folder left clean.
+  head -c 1M /dev/zero > full/filler
+  "$run" "$scene" --end 0.01 -q --out full/run2 2>e_noroom; rc=$?
+  check "no room for the reserve: exit 5 before the run (got $rc)" '[ $rc -eq 5 ] && grep -q "no room for the 5 MiB the run keeps" e_noroom && [ ! -e full/run2 ]'
+  umount full
+else
+  echo "FAIL: cannot mount a tmpfs (the disk-full checks need root)"; fail=1
+fi
+
 # 5. Inputs that never end or are too deep: refused at once.
 mkfifo fifo
 timeout 20 "$run" fifo -q 2>e5; rc=$?

@@ -198,6 +198,7 @@ int main(int argc, char** argv) {
     std::unique_ptr<sph::RunFolder> folder;  // declared first: released last
     std::unique_ptr<sph::Simulation> sim;
     std::unique_ptr<sph::Recorder> recorder;
+    std::optional<std::chrono::steady_clock::time_point> run_started;  // for the summary of a salvaged run
     try {
         std::vector<std::pair<std::string, nlohmann::json>> overrides;
         for (const auto& s : sets) overrides.push_back(sph::parse_override(s));
@@ -338,6 +339,7 @@ int main(int argc, char** argv) {
 
         const bool tty = ::isatty(STDERR_FILENO);
         const auto t0 = std::chrono::steady_clock::now();
+        run_started = t0;
         auto last_report = t0;
         const double end = scene.simulation.end_time;
         install_stop_handlers();
@@ -419,6 +421,14 @@ int main(int argc, char** argv) {
         return 3;
     } catch (const sph::OutputError& e) {
         std::fprintf(stderr, "\nsph-run: cannot write an output: %s\n", e.what());
+        // What was computed is saved into the room the recorder kept in reserve.
+        if (recorder && sim) {
+            const double wall = run_started ? std::chrono::duration<double>(std::chrono::steady_clock::now() -
+                                                                            *run_started).count()
+                                            : 0.0;
+            for (const auto& line : recorder->salvage(*sim, e.what(), wall, threads))
+                std::fprintf(stderr, "sph-run: saved before stopping: %s\n", line.c_str());
+        }
         return 5;
     } catch (const std::filesystem::filesystem_error& e) {
         std::fprintf(stderr, "\nsph-run: cannot write an output: %s\n", e.what());

@@ -1,6 +1,11 @@
 #include "engine/run/recorder.hpp"
 
+#include <fcntl.h>
 #include <sys/resource.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
 
 #include <algorithm>
 #include <array>
@@ -40,6 +45,79 @@ void check_surface_formats(const World& w) {
                              "vtu, bgeo or ply)");
 }
 constexpr std::size_t kMaxPendingStats = std::size_t(4) << 20;  // bytes of rows held in memory
+/// Room kept for salvage(): the most pending stats rows, plus summary.json and probes.
+constexpr std::size_t kReserveBytes = kMaxPendingStats + (std::size_t(1) << 20);
+constexpr const char* kReserveName = ".sph-reserve";
+}
+
+void Recorder::reserve_space() {
+    const auto file = m_dir / kReserveName;
+    const int fd = ::open(file.c_str(), O_WRONLY | O_CREAT | O_CLOEXEC, 0644);
+    if (fd < 0)
+        throw OutputError(file.string() + ": cannot create the reserve (" + std::strerror(errno) + ")");
+    int rc = ::posix_fallocate(fd, 0, off_t(kReserveBytes));
+    if (rc == EOPNOTSUPP || rc == EINVAL) {  // a file system without fallocate: write the bytes
+        const std::string zeros(std::size_t(1) << 16, '\0');
+        rc = 0;
+        for (std::size_t done = 0; done < kReserveBytes && rc == 0; done += zeros.size())
+            if (::pwrite(fd, zeros.data(), zeros.size(), off_t(done)) != ssize_t(zeros.size())) rc = errno;
+    }
+    ::close(fd);
+    if (rc != 0) {
+        std::error_code ec;
+        std::filesystem::remove(file, ec);
+        throw OutputError(m_dir.string() + ": no room for the " + std::to_string(kReserveBytes >> 20) +
+                          " MiB the run keeps to save its records if the disk fills (" + std::strerror(rc) + ")");
+    }
+}
+
+void Recorder::release_reserve() {
+    std::error_code ec;
+    std::filesystem::remove(m_dir / kReserveName, ec);
+}
+
+std::vector<std::string> Recorder::salvage(const Simulation& sim, const std::string& reason, double wall_seconds,
+                                           int threads) {
+    release_reserve();
+    std::vector<std::string> report;
+    m_output_failed = reason;
+    // stats.csv: its committed bytes are intact; the pending rows go after them in place (an
+    // AtomicFile would need room for a second copy of the whole file).
+    const auto csv = m_dir / "stats.csv";
+    const std::size_t rows = std::size_t(std::count(m_pending.begin(), m_pending.end(), '\n')) -
+                             (m_stats_bytes == 0 && !m_pending.empty() ? 1 : 0);  // not the header
+    const int fd = ::open(csv.c_str(), O_WRONLY | O_CREAT | O_CLOEXEC, 0644);
+    bool ok = fd >= 0 && ::ftruncate(fd, off_t(m_stats_bytes)) == 0;
+    for (std::size_t done = 0; ok && done < m_pending.size();) {
+        const ssize_t n = ::pwrite(fd, m_pending.data() + done, m_pending.size() - done, off_t(m_stats_bytes + done));
+        ok = n > 0;
+        if (ok) done += std::size_t(n);
+    }
+    const std::string why = std::strerror(errno);
+    if (ok) {
+        m_stats_bytes += m_pending.size();
+        m_pending.clear();
+        report.push_back("stats.csv: complete to t = " + std::to_string(sim.time()) + " s (" + std::to_string(rows) +
+                         " rows saved from memory)");
+    } else {
+        if (fd >= 0) [[maybe_unused]] const int back = ::ftruncate(fd, off_t(m_stats_bytes));  // whole rows only
+        m_pending.clear();  // lost: finish() must not try them again
+        report.push_back("stats.csv: " + std::to_string(rows) + " rows could not be saved (" + why + ")");
+    }
+    if (fd >= 0) ::close(fd);
+    try {
+        finish(sim, wall_seconds, threads);
+        report.emplace_back("summary.json: written, marked \"output_failed\"");
+    } catch (const std::exception& e) {
+        report.push_back(std::string("summary.json: not written (") + e.what() + ")");
+    }
+    try {
+        m_probes.write(m_dir);
+        if (!sim.world().scene.probes.empty()) report.emplace_back("probes/: written");
+    } catch (const std::exception& e) {
+        report.push_back(std::string("probes/: not written (") + e.what() + ")");
+    }
+    return report;
 }
 
 // The stats.csv schema: these columns in this order in every run (a counter no system of the
@@ -75,6 +153,7 @@ Recorder::Recorder(std::filesystem::path dir, const Simulation& sim)
     : m_dir(std::move(dir)), m_probes(sim.world().scene.probes) {
     check_surface_formats(sim.world());
     std::filesystem::create_directories(m_dir);
+    reserve_space();
     m_pending = header(sim);
     m_t0 = std::chrono::steady_clock::now();
 }
@@ -83,6 +162,7 @@ Recorder::Recorder(std::filesystem::path dir, const Simulation& sim, const nlohm
     : m_dir(std::move(dir)), m_probes(sim.world().scene.probes) {
     check_surface_formats(sim.world());
     std::filesystem::create_directories(m_dir);
+    reserve_space();
     m_frame = st.at("frame").get<std::size_t>();
     m_boundary_written = std::filesystem::exists(m_dir / "boundary" / "walls.vtu") ||
                          std::filesystem::exists(m_dir / "boundary" / "walls.ply") ||
@@ -369,7 +449,10 @@ nlohmann::json Recorder::finish(const Simulation& sim, double wall_seconds, int 
     j["systems"] = systems;
     j["systems_total_s"] = total;
     if (!m_interrupted.empty()) j["interrupted"] = {{"by", m_interrupted}, {"t", sim.time()}, {"step", sim.steps()}};
+    if (!m_output_failed.empty())
+        j["output_failed"] = {{"reason", m_output_failed}, {"t", sim.time()}, {"step", sim.steps()}};
     write_file_atomic(m_dir / "summary.json", j.dump(2) + "\n");
+    if (m_output_failed.empty()) release_reserve();
     return j;
 }
 

@@ -7,6 +7,10 @@
 /// each checkpoint, whenever 4 MiB of rows are pending, and at the end: the new file is the
 /// committed prefix copied from the old one plus the pending rows, so memory stays bounded
 /// and a killed run leaves a complete prefix of whole rows.
+/// A full disk does not lose the run: the recorder keeps 5 MiB in reserve (.sph-reserve, made
+/// before the run starts) and, when an output cannot be written, salvage() frees it and saves
+/// what was computed into that room: the pending stats.csv rows, summary.json (marked
+/// "output_failed") and the probe series.
 #include <chrono>
 #include <map>
 #include <filesystem>
@@ -47,9 +51,18 @@ public:
     void set_interrupted(std::string reason) { m_interrupted = std::move(reason); }
     /// @brief Commits the pending stats.csv rows.
     void flush_stats();
+    /// @brief After an output failed (OutputError: disk full, ...): frees the reserve, appends
+    /// the pending stats.csv rows in place (the committed file is intact: every write is atomic),
+    /// writes summary.json marked "output_failed" with `reason`, and the probes. Returns one line
+    /// per output saved or not ("stats.csv: 1234 rows up to t = ...", "summary.json: ...").
+    std::vector<std::string> salvage(const Simulation& sim, const std::string& reason, double wall_seconds,
+                                     int threads);
 
 private:
     std::string m_interrupted;  ///< why the run stopped early ("" when it reached its end)
+    std::string m_output_failed;  ///< the output error salvage() was called for
+    void reserve_space();
+    void release_reserve();
     void write_frame(const Simulation& sim);
     /// surface/surface_NNNNN.vdb and/or .ply (formats vdb, mesh) from one level set.
     void write_surface(const World& w, const char* name);
