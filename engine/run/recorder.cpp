@@ -71,6 +71,8 @@ void Recorder::reserve_space() {
     }
 }
 
+Recorder::~Recorder() { release_reserve(); }
+
 void Recorder::release_reserve() {
     std::error_code ec;
     std::filesystem::remove(m_dir / kReserveName, ec);

@@ -35,6 +35,9 @@ public:
     /// first stats_bytes bytes of dir/stats.csv are kept (a fresh stats.csv is started at the
     /// checkpoint's step when the directory has none).
     Recorder(std::filesystem::path dir, const Simulation& sim, const nlohmann::json& state);
+    ~Recorder();  ///< removes the reserve whatever ended the run
+    Recorder(const Recorder&) = delete;
+    Recorder& operator=(const Recorder&) = delete;
     /// @brief Called after every step: appends the stats row, writes a frame when due.
     void after_step(const Simulation& sim);
     /// @brief Writes the initial frame (t = 0).
