@@ -21,6 +21,15 @@ std::vector<Vec3d> sample_block(const Aabb& box, double spacing) {
     return out;
 }
 
+BlockFill block_fill(const Aabb& box, double spacing) {
+    BlockFill f;
+    f.particles = lattice_dims(box, spacing).cwiseMax(0);
+    const Vec3d extent = box.max - box.min;
+    f.declared_volume = extent.prod();
+    f.particle_volume = double(f.particles.x()) * f.particles.y() * f.particles.z() * spacing * spacing * spacing;
+    return f;
+}
+
 namespace {
 
 // Points of a box surface lattice (every lattice point with an index on a face), with the

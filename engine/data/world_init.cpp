@@ -8,6 +8,8 @@
 #include "engine/data/components.hpp"
 #include "engine/data/sampling.hpp"
 
+#include <spdlog/spdlog.h>
+
 namespace sph {
 
 namespace {
@@ -88,6 +90,19 @@ FluidSample sample_fluid(const Scene& scene, double r) {
     FluidSample f;
     for (std::size_t bi = 0; bi < scene.fluid_blocks.size(); ++bi) {
         const auto& block = scene.fluid_blocks[bi];
+        // The lattice fills whole spacings; say when that leaves noticeably less water than
+        // declared (the spacing is fixed by the particle radius, and a stretched lattice would
+        // start away from the rest density).
+        const BlockFill fill = block_fill(block.box, 2 * r);
+        if (fill.shortfall() > 0.01) {
+            const Vec3d e = block.box.max - block.box.min;
+            spdlog::warn("/fluid_blocks/{}: {} x {} x {} = {} particles hold {:.4g} m^3 of water, {:.1f} % less than "
+                         "the block's {:.4g} m^3 ({:.4g} x {:.4g} x {:.4g} m filled in whole spacings of 2 r = {:.4g} m); "
+                         "sides that are multiples of the spacing hold their volume exactly",
+                         bi, fill.particles.x(), fill.particles.y(), fill.particles.z(),
+                         fill.particles.x() * fill.particles.y() * fill.particles.z(), fill.particle_volume,
+                         100 * fill.shortfall(), fill.declared_volume, e.x(), e.y(), e.z(), 2 * r);
+        }
         auto pts = sample_block(block.box, 2 * r);
         f.x.insert(f.x.end(), pts.begin(), pts.end());
         f.v.insert(f.v.end(), pts.size(), block.velocity);
