@@ -140,7 +140,10 @@ public:
             d.radius = number(p, path, "radius", 0, false, "a number > 0 (metres)", 0.0);
         } else if (type == "height") {
             d.type = ProbeType::Height;
-            keys(p, path, {"type", "name", "rate", "experiment", "from", "to"}, ctx);
+            keys(p, path, {"type", "name", "rate", "experiment", "from", "to", "method"}, ctx);
+            d.height_method = word(p, path, "method", {"column", "highest"}, "column") == "column"
+                                  ? HeightMethod::Column
+                                  : HeightMethod::Highest;
             d.from = vec3(p, path, "from", std::nullopt);
             d.to = vec3(p, path, "to", std::nullopt);
             if ((d.to - d.from).norm() <= 0) fail(path + "/to", p["to"], "a point different from \"from\"");

@@ -20,6 +20,10 @@ enum class PressureSource { Fluid, Boundary };
 /// @brief How a front probe finds the front: the farthest fluid particle with at least
 /// `min_neighbours` neighbours, or the 0.5 level of the colour function along a line.
 enum class FrontMethod { Neighbours, Colour };
+/// @brief How a height probe reads the water height along its line: the top of the continuous
+/// column that starts at `from` (the first dry stretch of at least one spacing ends it, so
+/// droplets and spray above do not count), or the highest wet point anywhere on the line.
+enum class HeightMethod { Column, Highest };
 
 const char* to_string(ProbeType t);
 
@@ -45,6 +49,8 @@ struct ProbeDesc {
     double radius = 0.0;       ///< m, boundary source; default 2 particle spacings (0 = default)
     // height, front (colour)
     Vec3d from{0, 0, 0}, to{0, 0, 0};  ///< m: the line, from its start to its end
+    // height
+    HeightMethod height_method = HeightMethod::Column;
     // front
     FrontMethod method = FrontMethod::Neighbours;
     Vec3d direction{1, 0, 0};  ///< unit; the front is the largest projection on it

@@ -102,6 +102,32 @@ double iso_distance(const World& w, const UniformGrid& grid, const Vec3d& from, 
     return 0.5 * (s0 + s1);
 }
 
+double column_height(const World& w, const UniformGrid& grid, const Vec3d& from, const Vec3d& to) {
+    const double length = (to - from).norm(), spacing = double(w.physics.spacing);
+    const int n = std::max(1, int(std::ceil(length / (0.25 * spacing))));
+    const double ds = length / n;
+    const auto wet = [&](double s) { return colour_at(w, grid, from + (to - from) * (s / length)) >= 0.5; };
+    // The column starts within one spacing of `from` (on a floor the colour is about 0.5: half
+    // the kernel support is below it), else there is no water here.
+    int k = 0;
+    while (k <= n && k * ds <= spacing && !wet(k * ds)) ++k;
+    if (k > n || k * ds > spacing) return 0.0;
+    // Its top: the start of the first dry stretch at least one spacing long (a gap the size of a
+    // particle is a bubble or noise, not the end of the water).
+    const int gap = std::max(1, int(std::ceil(spacing / ds)));
+    int dry = 0;
+    for (; k <= n && dry < gap; ++k) dry = wet(k * ds) ? 0 : dry + 1;
+    if (dry == 0) return length;  // wet to the line's end
+    // Bisection between the last wet sample and the first of the dry stretch (which may be
+    // shorter than a spacing where it reaches the line's end).
+    double s0 = (k - dry - 1) * ds, s1 = (k - dry) * ds;
+    while (s1 - s0 > 1e-3 * spacing) {
+        const double mid = 0.5 * (s0 + s1);
+        (wet(mid) ? s0 : s1) = mid;
+    }
+    return 0.5 * (s0 + s1);
+}
+
 double front_by_neighbours(const World& w, const UniformGrid& grid, const Vec3d& dir, int k) {
     const auto x = w.fluid.store.get(comp::position);
     const Vec3 d = dir.cast<Real>();
@@ -261,7 +287,8 @@ void ProbeSet::sample(std::size_t k, const World& w, const UniformGrid& grid) {
             }
             break;
         case ProbeType::Height: {
-            const double s = iso_distance(w, grid, d.from, d.to);
+            const double s = d.height_method == HeightMethod::Column ? column_height(w, grid, d.from, d.to)
+                                                                     : iso_distance(w, grid, d.from, d.to);
             const Vec3d at = d.from + (d.to - d.from).normalized() * s;
             row.insert(row.end(), {s, at.x(), at.y(), at.z()});
             break;

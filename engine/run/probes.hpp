@@ -45,6 +45,12 @@ double boundary_pressure_at(const World& w, const UniformGrid& grid, const Vec3d
 /// function from wet (c >= 0.5) to dry (samples a quarter spacing apart, then bisection to
 /// 0.001 spacing); 0 when no sample is wet, the length when the end is wet.
 double iso_distance(const World& w, const UniformGrid& grid, const Vec3d& from, const Vec3d& to);
+/// @brief The top of the continuous water column along the segment from `from` to `to` (metres
+/// from `from`): the column must start within one particle spacing of `from`; its top is where
+/// the colour falls through 0.5 at the start of the first dry stretch at least one spacing long
+/// (bisected to 1e-3 spacing). Droplets and spray above such a gap do not count; 0 without a
+/// column. (A height probe's default, `"method": "column"`; iso_distance is `"highest"`.)
+double column_height(const World& w, const UniformGrid& grid, const Vec3d& from, const Vec3d& to);
 /// @brief Largest projection on `dir` (unit) of a fluid particle centre with at least `k`
 /// fluid neighbours within h (self excluded); -inf when none has.
 double front_by_neighbours(const World& w, const UniformGrid& grid, const Vec3d& dir, int k);

@@ -63,6 +63,39 @@ TEST(Probes, HeightAndColourFrontFindTheBlockFaces) {
     std::printf("probes: lattice top at %.5f m (0.3), side at %.5f m (0.2)\n", height, front);
 }
 
+// Issue 16: a height probe must report the water column, not the splash above it. The block's
+// top layer (y = 0.29 m) at the probe line's column is lifted by 0.1 m into a detached sheet
+// (0.39 m, an isolated layer of droplets with a 0.08 m dry gap below): the column method still
+// reads the column's top, now one layer lower (0.28 m: the lifted particles left the column),
+// and the highest wet point reads the sheet (about 0.4 m). Also a line whose start is dry (no
+// water within a spacing of `from`) reads 0 with the column method. Tolerance 0.1 spacing, as
+// above; the sheet's 0.5 level within 0.25 spacing (a single layer's colour peaks near 0.6).
+TEST(Probes, ColumnHeightIgnoresSplashAbove) {
+    auto sim = block_at_rest();
+    World& w = sim->world();
+    auto x = w.fluid.store.get(comp::position);
+    int lifted = 0;
+    for (auto& p : x)
+        if (std::abs(p.y() - 0.29f) < 1e-4f && p.x() < 0.2f && p.z() < 0.2f) {
+            p.y() += 0.1f;
+            ++lifted;
+        }
+    ASSERT_EQ(lifted, 100);
+    const auto g = grid_of(w);
+    const double spacing = 0.02;
+    const Vec3d from{0.1, 0.0, 0.1}, to{0.1, 0.5, 0.1};
+    EXPECT_NEAR(column_height(w, g, from, to), 0.28, 0.1 * spacing);
+    const double highest = iso_distance(w, g, from, to);
+    EXPECT_GT(highest, 0.39);
+    EXPECT_LT(highest, 0.40 + 0.25 * spacing);
+    // Starting 0.1 m above the floor (inside the water) the column reads from there; starting in
+    // the dry gap the line has no column at its start: 0, where "highest" still sees the sheet.
+    EXPECT_NEAR(column_height(w, g, {0.1, 0.1, 0.1}, to), 0.18, 0.1 * spacing);
+    EXPECT_EQ(column_height(w, g, {0.1, 0.32, 0.1}, to), 0.0);
+    EXPECT_GT(iso_distance(w, g, {0.1, 0.32, 0.1}, to), 0.0);
+    std::printf("probes: column %.5f m (0.28), highest %.5f m\n", column_height(w, g, from, to), highest);
+}
+
 // Largest x of a particle centre with >= k neighbours is the last lattice column, 0.19 m; the
 // probe reports the face of its cell, + r = 0.2 m. A lone particle thrown ahead (0 neighbours)
 // must not count. Exact up to float rounding.
