@@ -107,11 +107,13 @@ double column_height(const World& w, const UniformGrid& grid, const Vec3d& from,
     const int n = std::max(1, int(std::ceil(length / (0.25 * spacing))));
     const double ds = length / n;
     const auto wet = [&](double s) { return colour_at(w, grid, from + (to - from) * (s / length)) >= 0.5; };
-    // The column starts within one spacing of `from` (on a floor the colour is about 0.5: half
-    // the kernel support is below it), else there is no water here.
+    // The column starts within one kernel support h of `from` (on a floor the colour is about
+    // 0.5, half the support being below it, and less in a corner between floor and wall), else
+    // there is no water here.
+    const double h = double(w.physics.h);
     int k = 0;
-    while (k <= n && k * ds <= spacing && !wet(k * ds)) ++k;
-    if (k > n || k * ds > spacing) return 0.0;
+    while (k <= n && k * ds <= h && !wet(k * ds)) ++k;
+    if (k > n || k * ds > h) return 0.0;
     // Its top: the start of the first dry stretch at least one spacing long (a gap the size of a
     // particle is a bubble or noise, not the end of the water).
     const int gap = std::max(1, int(std::ceil(spacing / ds)));

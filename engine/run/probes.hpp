@@ -46,7 +46,7 @@ double boundary_pressure_at(const World& w, const UniformGrid& grid, const Vec3d
 /// 0.001 spacing); 0 when no sample is wet, the length when the end is wet.
 double iso_distance(const World& w, const UniformGrid& grid, const Vec3d& from, const Vec3d& to);
 /// @brief The top of the continuous water column along the segment from `from` to `to` (metres
-/// from `from`): the column must start within one particle spacing of `from`; its top is where
+/// from `from`): the column must start within the kernel support h of `from`; its top is where
 /// the colour falls through 0.5 at the start of the first dry stretch at least one spacing long
 /// (bisected to 1e-3 spacing). Droplets and spray above such a gap do not count; 0 without a
 /// column. (A height probe's default, `"method": "column"`; iso_distance is `"highest"`.)
