@@ -51,7 +51,9 @@ done
 sleep 0.3
 kill -9 $pid 2>/dev/null; killed=$?; wait $pid 2>/dev/null
 check "the run was killed while running" '[ $killed -eq 0 ]'
-check "no temporary file left" '[ -z "$(find "$tmp/k" -name "*.tmp*")" ]'
+# A kill in the moment between naming a finished file and renaming it (AtomicFile::commit) can
+# leave that one hidden temporary; never more, and the resume below removes it.
+check "at most one temporary file left" '[ "$(find "$tmp/k" -name "*.tmp*" | wc -l)" -le 1 ]'
 check "every file left is complete and readable" '"$py" - "$tmp/k" "$src/tools" <<PY
 import json, pathlib, sys
 sys.path.insert(0, sys.argv[2])
@@ -81,6 +83,7 @@ PY'
 last=$(ls "$tmp/k/checkpoints" | tail -1)
 "$run" --resume "$tmp/k/checkpoints/$last" -q; rc=$?
 check "resume from $last exits 0 (got $rc)" '[ $rc -eq 0 ]'
+check "no temporary file left after the resume" '[ -z "$(find "$tmp/k" -name "*.tmp*")" ]'
 check "resumed run: stats.csv physics columns equal the uninterrupted run's" 'cmp -s <(physics "$tmp/a/stats.csv") <(physics "$tmp/k/stats.csv")'
 check "resumed run: frames byte-identical to the uninterrupted run's" 'same_frames "$tmp/a" "$tmp/k"'
 same_probes() {  # same_probes DIR_A DIR_B: same probe series, byte-identical (the whole run's)

@@ -109,6 +109,14 @@ RunFolder::RunFolder(fs::path dir, std::string run_id, std::string scene, bool r
             who += " (pid " + std::to_string(marker["pid"].get<long long>()) + ", " + describe(marker) + ")";
         throw InputError(m_dir.string() + ": " + who + " is writing to this folder; wait for it or choose another --out");
     }
+    // A run killed between naming a finished file and renaming it onto its target (the moment
+    // AtomicFile::commit needs) leaves that hidden temporary; the folder is ours now (locked), so
+    // no live writer owns one: remove them.
+    for (const char* sub : {"", "frames", "boundary", "probes", "checkpoints", "surface"}) {
+        for (const auto& e : fs::directory_iterator(m_dir / sub, ec))
+            if (e.path().filename().native().starts_with(".sph.tmp")) fs::remove(e.path(), ec);
+        ec.clear();
+    }
     const std::string outputs = list_outputs(m_dir);
     try {
         if (!resume) {
