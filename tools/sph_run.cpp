@@ -395,12 +395,8 @@ int main(int argc, char** argv) {
                          100.0 * s["share"].get<double>());
         std::string fmts;
         for (const auto f : scene.output.formats) fmts += std::string(fmts.empty() ? "" : ", ") + sph::to_string(f);
-        const bool surfaces = std::any_of(scene.output.formats.begin(), scene.output.formats.end(),
-                                          [](sph::FrameFormat f) { return !sph::is_particle_format(f); });
-        const bool particles = std::any_of(scene.output.formats.begin(), scene.output.formats.end(),
-                                           sph::is_particle_format);
-        std::string where = particles ? (out / "frames").string() : "";
-        if (surfaces) where += (where.empty() ? "" : " and ") + (out / "surface").string();
+        std::string where = scene.output.writes_particles() ? (out / "frames").string() : "";
+        if (scene.output.writes_surface()) where += (where.empty() ? "" : " and ") + (out / "surface").string();
         spdlog::info("wrote {} frame(s) ({}) to {}, stats.csv and summary.json to {}", recorder->frames_written(),
                      recorder->frames_written() ? fmts : "none", where, out.string());
         if (const auto it = summary.find("surface"); it != summary.end())

@@ -2,6 +2,7 @@
 /// @file scene.hpp
 /// @brief A validated scene: what to simulate, how, and what to write. Loaded from strict JSON
 /// (see scenes/README.md for the format, with units) or built in code.
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <filesystem>
@@ -237,6 +238,9 @@ struct SurfaceParams {
 struct OutputParams {
     std::vector<FrameFormat> formats{FrameFormat::Vtu};
     SurfaceParams surface;
+    bool writes(FrameFormat f) const { return std::find(formats.begin(), formats.end(), f) != formats.end(); }
+    bool writes_particles() const { return std::any_of(formats.begin(), formats.end(), is_particle_format); }
+    bool writes_surface() const { return writes(FrameFormat::Vdb) || writes(FrameFormat::Mesh); }
     /// Particle attributes written per frame, besides position and id (always written): any
     /// of "position", "velocity", "density", "pressure", "acceleration", "dt", "active", "bin".
     std::vector<std::string> attributes{"velocity", "density", "pressure"};

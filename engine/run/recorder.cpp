@@ -38,11 +38,11 @@ double front_x(const World& w) {
 namespace {
 /// Refuses the surface formats before the run starts when this build has no OpenVDB.
 void check_surface_formats(const World& w) {
-    for (const FrameFormat f : w.scene.output.formats)
-        if ((f == FrameFormat::Vdb || f == FrameFormat::Mesh) && !surface_available())
-            throw InputError(std::string("output format \"") + to_string(f) +
-                             "\" needs OpenVDB: this build has SPH_WITH_OPENVDB=OFF (rebuild with it ON, or choose "
-                             "vtu, bgeo or ply)");
+    if (!w.scene.output.writes_surface() || surface_available()) return;
+    const FrameFormat f = w.scene.output.writes(FrameFormat::Vdb) ? FrameFormat::Vdb : FrameFormat::Mesh;
+    throw InputError(std::string("output format \"") + to_string(f) +
+                     "\" needs OpenVDB: this build has SPH_WITH_OPENVDB=OFF (rebuild with it ON, or choose "
+                     "vtu, bgeo or ply)");
 }
 constexpr std::size_t kMaxPendingStats = std::size_t(4) << 20;  // bytes of rows held in memory
 /// Room kept for salvage(): the most pending stats rows, plus summary.json and probes.
@@ -241,8 +241,7 @@ void Recorder::write_frame(const Simulation& sim) {
     const World& w = sim.world();
     char name[32];
     std::snprintf(name, sizeof name, "frame_%05zu", m_frame);
-    const auto& formats = w.scene.output.formats;
-    if (std::any_of(formats.begin(), formats.end(), is_particle_format)) sph::write_frame(m_dir / "frames" / name, w);
+    if (w.scene.output.writes_particles()) sph::write_frame(m_dir / "frames" / name, w);
     std::snprintf(name, sizeof name, "surface_%05zu", m_frame);
     write_surface(w, name);
     // The walls and obstacles once (boundary/walls.*), the moving bodies with every frame
@@ -264,9 +263,7 @@ void Recorder::write_frame(const Simulation& sim) {
 }
 
 void Recorder::write_surface(const World& w, const char* name) {
-    const auto& formats = w.scene.output.formats;
-    const bool vdb = std::find(formats.begin(), formats.end(), FrameFormat::Vdb) != formats.end();
-    const bool mesh = std::find(formats.begin(), formats.end(), FrameFormat::Mesh) != formats.end();
+    const bool vdb = w.scene.output.writes(FrameFormat::Vdb), mesh = w.scene.output.writes(FrameFormat::Mesh);
     if (!vdb && !mesh) return;
     const auto t0 = std::chrono::steady_clock::now();
     const double r = w.physics.particle_radius;
@@ -280,9 +277,7 @@ void Recorder::write_surface(const World& w, const char* name) {
 void Recorder::write_collection(const World& w) const {
     // A ParaView collection of the .vtu frames with the time each was written at (the first step
     // that reached k / frame_rate), so ParaView's time is the simulated time.
-    if (std::find(w.scene.output.formats.begin(), w.scene.output.formats.end(), FrameFormat::Vtu) ==
-        w.scene.output.formats.end())
-        return;
+    if (!w.scene.output.writes(FrameFormat::Vtu)) return;
     const auto collection = [&](const char* stem, const char* file) {
         std::ostringstream x;
         x << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
