@@ -74,6 +74,16 @@ const char* to_string(PressureGradient g) {
     return "unknown";
 }
 
+const char* to_string(DensityForm d) {
+    switch (d) {
+        case DensityForm::Summation:
+            return "summation";
+        case DensityForm::Continuity:
+            return "continuity";
+    }
+    return "unknown";
+}
+
 const char* to_string(Activation a) {
     switch (a) {
         case Activation::Deadline:

@@ -38,6 +38,11 @@ enum class BoundaryHandling { Ihmsen, DirectForcing };
 /// makes the force first-order consistent while keeping it antisymmetric (momentum conserved)
 /// and repulsive (systems/forces/gradient_correction_system.hpp).
 enum class PressureGradient { Symmetric, Corrected };
+/// WCSPH density: `summation` is He et al. eq. 1 (rho_i = sum_j m_j W_ij, recomputed at every
+/// evaluation); `continuity` integrates drho_i/dt = sum_j m_j v_ij . grad W_ij (He eq. 5) plus
+/// the delta-SPH density diffusion (fluid.density_diffusion; Molteni & Colagrossi 2009 with the
+/// hydrostatic correction of Fourtakas et al. 2019), starting from the summation density.
+enum class DensityForm { Summation, Continuity };
 /// When `individual` evaluates a particle whose deadline t_last + Delta t_i is near (the rule
 /// behind He et al. Alg. 2 line 2). `deadline`: at the last step that starts before the
 /// deadline, and no step is longer than the earliest deadline it would carry an inactive
@@ -53,6 +58,7 @@ const char* to_string(SteppingMode m);
 const char* to_string(PcisphLoop l);
 const char* to_string(BoundaryHandling b);
 const char* to_string(PressureGradient g);
+const char* to_string(DensityForm d);
 const char* to_string(Activation a);
 /// @brief Every method and every stepping mode the loader knows, by name (sph-run --list-modes;
 /// the study tool runs each pair a scene accepts, so a new mode joins it with no new code).
@@ -141,6 +147,13 @@ struct FluidParams {
     /// WCSPH only: `corrected` for hydrostatic accuracy (docs/results/validation.md), at the cost of one
     /// more pass over the neighbours per step.
     PressureGradient pressure_gradient = PressureGradient::Symmetric;
+    /// WCSPH only: how the density evolves (DensityForm).
+    DensityForm density = DensityForm::Summation;
+    /// delta of the delta-SPH diffusion term with `density: continuity` (Molteni & Colagrossi 2009
+    /// eq. 8; 0.1 as in the literature and DualSPHysics); 0 turns it off. Unset: 0.1.
+    std::optional<double> density_diffusion;
+    /// Kinematic viscosity nu (m^2/s) of the laminar term of Morris et al. 1997 (WCSPH; 0: none).
+    double kinematic_viscosity = 0.0;
 };
 
 /// @brief A block of fluid particles on a cubic lattice of spacing 2 r, filling [min, max].

@@ -235,6 +235,22 @@ class Reader {
                     "\"wcsph\" only (PCISPH and DFSPH have their own pressure solvers)",
                     {"/fluid/pressure_gradient", "/simulation/method"});
         }
+        if (s.fluid.density == DensityForm::Continuity && !wcsph) {
+            fail_at("/fluid/density", dump_at("/fluid/density"),
+                    "\"summation\" or no key: the continuity density is implemented for method \"wcsph\" only",
+                    {"/fluid/density", "/simulation/method"});
+        }
+        if (s.fluid.density_diffusion && s.fluid.density != DensityForm::Continuity) {
+            fail_at("/fluid/density_diffusion", dump_at("/fluid/density_diffusion"),
+                    "no key unless fluid.density is \"continuity\": the summation density is recomputed at every "
+                    "evaluation and has nothing to diffuse",
+                    {"/fluid/density_diffusion", "/fluid/density"});
+        }
+        if (s.fluid.kinematic_viscosity > 0 && !wcsph) {
+            fail_at("/fluid/kinematic_viscosity", dump_at("/fluid/kinematic_viscosity"),
+                    "0 or no key: the laminar viscosity (Morris et al. 1997) is implemented for method \"wcsph\" only",
+                    {"/fluid/kinematic_viscosity", "/simulation/method"});
+        }
         if (const json* v = root.find("probes")) s.probes = parse_probes(*v, m_file);  // engine/probes.cpp
 
         cross_check(s);
@@ -574,6 +590,11 @@ class Reader {
                     p.surface_tension);
         if (const json* v = n.find("pressure_gradient"))
             p.pressure_gradient = pick_enum(n.at(*v, "pressure_gradient"), k_gradients);
+        if (const json* v = n.find("density")) p.density = pick_enum(n.at(*v, "density"), k_density_forms);
+        if (const json* v = n.find("density_diffusion"))
+            p.density_diffusion = number(n.at(*v, "density_diffusion"),
+                                         {0.0, true, 1.0, true, "delta of the delta-SPH diffusion term (0.1 typical)"});
+        read_number(n, "kinematic_viscosity", non_negative("m^2/s (water: 1e-6)"), p.kinematic_viscosity);
     }
 
     Aabb read_box(const Node& n) const {

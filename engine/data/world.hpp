@@ -31,6 +31,10 @@ struct Physics {
     Real tait_b = 0;          ///< B = rho0 c_s^2 / gamma, gamma = 7 (He eq. 2)
     Real viscosity = 0;       ///< Monaghan alpha
     Real boundary_viscosity = 0;  ///< Monaghan alpha against boundary particles (0: free-slip walls)
+    /// WCSPH `fluid.density: continuity`: the density is integrated (He eq. 5 plus diffusion).
+    bool continuity = false;
+    Real density_diffusion = 0;     ///< delta-SPH delta (continuity only; 0: none)
+    Real kinematic_viscosity = 0;   ///< nu of the laminar term (Morris et al. 1997), m^2/s
     Vec3 gravity = Vec3::Zero();
     double fluid_height = 0;  ///< m, used for the default c_s
     /// Pair loops take the vectorised path (simulation.simd; never with SPH_DOUBLE).

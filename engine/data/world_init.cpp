@@ -76,6 +76,9 @@ void derive_constants(World& w, const Scene& scene) {
     ph.viscosity = Real(scene.fluid.viscosity);
     ph.boundary_viscosity = Real(scene.fluid.boundary_viscosity.value_or(scene.fluid.viscosity));
     ph.gravity = scene.simulation.gravity.cast<Real>();
+    ph.continuity = scene.fluid.density == DensityForm::Continuity;
+    ph.density_diffusion = ph.continuity ? Real(scene.fluid.density_diffusion.value_or(0.1)) : Real(0);
+    ph.kinematic_viscosity = Real(scene.fluid.kinematic_viscosity);
 #ifdef SPH_DOUBLE
     ph.simd = false;  // the vectorised loops are float-only
 #else

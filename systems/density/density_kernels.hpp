@@ -17,4 +17,20 @@ inline Real tait_pressure(Real rho, Real rho0, Real b) {
     return b * (x4 * x2 * x - Real(1));
 }
 
+/// @brief The drho_i/dt of the continuity density (`fluid.density: continuity`):
+///   D_i = sum_j m_j v_ij . grad W_ij + sum_b psi_b v_ib . grad W_ib           (He et al. eq. 5)
+///       + delta h_s c_s sum_j (m_j / rho_j) 2 (rho_ij - rho^H_ij) (x_ij . grad W_ij) / (r^2 + 0.01 h^2),
+/// the second line the delta-SPH diffusion (Molteni & Colagrossi 2009 eq. 8; Antuono et al.
+/// 2010), with its hydrostatic part removed as Fourtakas et al. 2019 do (DualSPHysics' "DDT type
+/// 2"): rho_ij = rho_i - rho_j, rho^H_ij = rho0 (g . x_ij) / c_s^2 the hydrostatic density
+/// difference (the Tait inverse linearised over one pair distance; relative error below
+/// rho0 |g| h / B, about 1e-3). A resting hydrostatic column has rho_ij = rho^H_ij and diffuses
+/// nothing; the boundary takes no part in it (Fourtakas et al.). h_s = h / 2 is the smoothing
+/// length of the cubic spline of support h, so delta h_s c_s 2 = delta h c_s.
+/// One fluid pair's diffusion, without the factor delta h c_s m_j (= 2 delta h_s c_s m_j):
+/// (rho_ij - rho^H_ij) xgrad / (rho_j (r^2 + 0.01 h^2)), xgrad = x_ij . grad W_ij.
+inline Real diffusion_term(Real rho_i, Real rho_j, Real rho_h_ij, Real xgrad, Real r2, Real eps_h2) {
+    return (rho_i - rho_j - rho_h_ij) * xgrad / (rho_j * (r2 + eps_h2));
+}
+
 }  // namespace sph

@@ -6,7 +6,11 @@
 
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <array>
+#include <cmath>
+#include <limits>
+#include <vector>
 
 #include "engine/data/components.hpp"
 #include "engine/data/world.hpp"
@@ -22,7 +26,12 @@ Access DensitySystem::access() const {
                    .write(fluid(comp::density), fluid(comp::pressure))
                    .read_if(m_with_boundary, res::boundary_neighbours, boundary(comp::position), boundary(comp::volume))
                    .read_if(m_individual, res::active_set)
-                   .write_if(m_individual, fluid(comp::density_last));
+                   .write_if(m_individual, fluid(comp::density_last))
+                   .read_if(m_continuity, fluid(comp::velocity))
+                   .write_if(m_continuity, fluid(comp::drho_dt))
+                   .read_if(m_continuity && m_individual, fluid(comp::t_last))
+                   .write_if(m_continuity && !m_individual, res::density_clock)
+                   .read_if(m_continuity && m_with_boundary && m_moving_boundary, boundary(comp::velocity));
     if (m_individual) a.rows(res::active_set);  // He Alg. 2 lines 6-7: the active rows only
     return a;
 }
@@ -31,9 +40,12 @@ void DensitySystem::register_components(World& w) {
     w.fluid.store.add(comp::density);
     w.fluid.store.add(comp::pressure);
     if (m_individual) w.fluid.store.add(comp::density_last);
+    if (m_continuity) w.fluid.store.add(comp::drho_dt);
+    if (m_continuity && !m_individual) w.resources.add<DensityClock>(res::density_clock.name, Lifetime::Kept);
 }
 
 void DensitySystem::run(Context& ctx) {
+    if (m_continuity) return run_continuity(ctx);
     const auto x = ctx.read(fluid(comp::position));
     auto rho = ctx.write(fluid(comp::density));
     auto p = ctx.write(fluid(comp::pressure));
@@ -97,6 +109,108 @@ void DensitySystem::run(Context& ctx) {
         for (std::size_t k = r.begin(); k < r.end(); ++k) {
             summation(active[k]);
             rho_last[active[k]] = rho[active[k]];
+        }
+    });
+}
+
+void DensitySystem::run_continuity(Context& ctx) {
+    const auto x = ctx.read(fluid(comp::position));
+    const auto v = ctx.read(fluid(comp::velocity));
+    auto rho = ctx.write(fluid(comp::density));
+    auto p = ctx.write(fluid(comp::pressure));
+    auto drho = ctx.write(fluid(comp::drho_dt));
+    const bool has_boundary = m_with_boundary && ctx.size(SetId::Boundary) > 0;
+    const auto xb = has_boundary ? ctx.read(boundary(comp::position)) : std::span<const Vec3>{};
+    const std::span<const Real> vb = has_boundary ? ctx.read(boundary(comp::volume)) : std::span<const Real>{};
+    const std::span<const Vec3> vel_b =
+        has_boundary && m_moving_boundary && ctx.has(SetId::Boundary, comp::velocity.name)
+            ? ctx.read(boundary(comp::velocity))
+            : std::span<const Vec3>{};
+    const NeighbourLists& fluid_nb = ctx.read(res::fluid_neighbours);
+    const NeighbourLists* boundary_nb = has_boundary ? &ctx.read(res::boundary_neighbours) : nullptr;
+    const CubicSpline& kernel = ctx.kernel();
+    const Physics& ph = ctx.physics();
+    const Real m = ph.mass, rho0 = ph.rest_density, c = ph.speed_of_sound, h = ph.h;
+    const Real diffusion = ph.density_diffusion * h * c, eps_h2 = Real(0.01) * h * h;
+    const Vec3 g_h = (rho0 / (c * c)) * ph.gravity;  // rho^H_ij = g_h . x_ij
+    // A row without a density (0) starts from its summation, at least rho0; its D_i is then
+    // still computed (the slope of individual stepping's interpolation) but not applied.
+    auto start = [&](Index i) {
+        const Vec3 xi = x[i];
+        Real sum = 0, bsum = 0;
+        for (Index j : fluid_nb.of(i)) sum += kernel.w((xi - x[j]).norm());
+        if (has_boundary)
+            for (Index b : boundary_nb->of(i)) bsum += vb[b] * kernel.w((xi - xb[b]).norm());
+        rho[i] = std::max(m * (kernel.w(0) + sum) + rho0 * bsum, rho0);
+    };
+    auto rate = [&](Index i) {
+        const Vec3 xi = x[i], vi = v[i];
+        const Real rhoi = rho[i];
+        Real div = 0, diffused = 0;
+        for (Index j : fluid_nb.of(i)) {
+            const Vec3 xij = xi - x[j];
+            const Real r2 = xij.squaredNorm();
+            const Vec3 grad = kernel.grad(xij, std::sqrt(r2));
+            div += (vi - v[j]).dot(grad);
+            if (diffusion > 0) diffused += diffusion_term(rhoi, rho[j], g_h.dot(xij), xij.dot(grad), r2, eps_h2);
+        }
+        Real bdiv = 0;
+        if (has_boundary)
+            for (Index b : boundary_nb->of(i)) {
+                const Vec3 xib = xi - xb[b];
+                const Vec3 vib = vel_b.empty() ? vi : Vec3(vi - vel_b[b]);
+                bdiv += vb[b] * vib.dot(kernel.grad(xib, xib.norm()));
+            }
+        return m * div + rho0 * bdiv + diffusion * m * diffused;
+    };
+    const Tick now = ctx.clock().t_ticks;
+    if (!m_individual) {
+        // Every row: D_i from the densities of time t_0 (all rows read before any is advanced).
+        DensityClock& clock = ctx.write(res::density_clock);
+        const Real dt = Real(to_seconds(now - clock.t_ticks));
+        // A started row is marked by a NaN pressure until the last pass sets it.
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 1024), [&](const auto& r) {
+            for (std::size_t i = r.begin(); i < r.end(); ++i)
+                if (rho[i] == Real(0)) start(Index(i)), p[i] = std::numeric_limits<Real>::quiet_NaN();
+        });
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 256), [&](const auto& r) {
+            for (std::size_t i = r.begin(); i < r.end(); ++i) drho[i] = rate(Index(i));
+        });
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 2048), [&](const auto& r) {
+            for (std::size_t i = r.begin(); i < r.end(); ++i) {
+                if (!std::isnan(p[i])) rho[i] += dt * drho[i];
+                p[i] = tait_pressure(rho[i], rho0, ph.tait_b);
+            }
+        });
+        clock.t_ticks = now;
+        return;
+    }
+    // Active rows: D_i from the interpolated densities of every row at t (He Alg. 2 line 9), then
+    // rho_i(t) = rho_i(t_last) + (t - t_last) D_i, the new base of the interpolation.
+    const auto& active = ctx.read(res::active_set);
+    auto rho_last = ctx.write(fluid(comp::density_last));
+    const auto t_last = ctx.read(fluid(comp::t_last));
+    // New rows (density 0) are started first, so that no rate reads a density of 0.
+    std::vector<Real> next(active.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, active.size(), 1024), [&](const auto& r) {
+        for (std::size_t k = r.begin(); k < r.end(); ++k) {
+            const Index i = active[k];
+            next[k] = rho[i] == Real(0) ? Real(-1) : Real(0);  // -1 marks a row summed now
+            if (next[k] < 0) start(i);
+        }
+    });
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, active.size(), 256), [&](const auto& r) {
+        for (std::size_t k = r.begin(); k < r.end(); ++k) {
+            const Index i = active[k];
+            drho[i] = rate(i);
+            next[k] = next[k] < 0 ? rho[i] : rho_last[i] + Real(to_seconds(now - t_last[i])) * drho[i];
+        }
+    });
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, active.size(), 1024), [&](const auto& r) {
+        for (std::size_t k = r.begin(); k < r.end(); ++k) {
+            const Index i = active[k];
+            rho[i] = rho_last[i] = next[k];
+            p[i] = tait_pressure(rho[i], rho0, ph.tait_b);
         }
     });
 }

@@ -62,6 +62,8 @@ void ForceRows(const ForcePairArgs& a, const Index* rows, std::size_t begin, std
     const auto alpha_2hc = hn::Set(d, Real(2) * a.alpha * a.h * a.speed_of_sound);
     const auto alpha_b_2hc = hn::Set(d, Real(2) * a.alpha_b * a.h * a.speed_of_sound);
     const bool viscous = a.alpha > 0, viscous_b = a.alpha_b > 0;
+    const bool laminar = a.nu4 > 0, laminar_b = laminar && a.alpha_b_laminar;
+    const auto nu4 = hn::Set(d, a.nu4);
     const bool sparse = rows_are_sparse(rows, begin, end);
     for (std::size_t q = begin; q < end; ++q) {
         const Index i = rows ? rows[q] : Index(q);
@@ -87,6 +89,13 @@ void ForceRows(const ForcePairArgs& a, const Index* rows, std::size_t begin, std
                                               hn::Add(vrhoi, rhoj), eps_h2));
             const Broadcast3<D> g = subtract_along_gradient(c, s, hn::IfThenElseZero(c.in, hn::Mul(m, coef)), acc);
             if (a.drho) div = hn::MulAdd(m, dot3(vij.x, vij.y, vij.z, g.x, g.y, g.z), div);
+            if (laminar) {  // a += m 4 nu (x_ij . grad W_ij) / ((rho_i + rho_j)(r^2 + eps)) v_ij
+                const auto lam = hn::Div(hn::Mul(m, hn::Mul(nu4, hn::Mul(s, c.r2))),
+                                         hn::Mul(hn::Add(vrhoi, rhoj), hn::Add(c.r2, eps_h2)));
+                acc.x = hn::MulAdd(lam, vij.x, acc.x);
+                acc.y = hn::MulAdd(lam, vij.y, acc.y);
+                acc.z = hn::MulAdd(lam, vij.z, acc.z);
+            }
         }
         if (a.xb) {
             const Index* blist = a.boundary->of(i).data();
@@ -103,6 +112,13 @@ void ForceRows(const ForcePairArgs& a, const Index* rows, std::size_t begin, std
                 const auto psi = hn::Mul(rho0, hn::GatherIndex(d, a.volume_b, c.j));
                 const Broadcast3<D> g = subtract_along_gradient(c, s, hn::IfThenElseZero(c.in, hn::Mul(psi, coef)), acc);
                 if (a.drho) div = hn::MulAdd(psi, dot3(vib.x, vib.y, vib.z, g.x, g.y, g.z), div);
+                if (laminar_b) {  // no-slip walls: psi 4 nu xgrad / ((rho_i + rho0)(r^2 + eps)) v_ib
+                    const auto lam = hn::Div(hn::Mul(psi, hn::Mul(nu4, hn::Mul(s, c.r2))),
+                                             hn::Mul(hn::Add(vrhoi, rho0), hn::Add(c.r2, eps_h2)));
+                    acc.x = hn::MulAdd(lam, vib.x, acc.x);
+                    acc.y = hn::MulAdd(lam, vib.y, acc.y);
+                    acc.z = hn::MulAdd(lam, vib.z, acc.z);
+                }
             }
         }
         store_sum3(d, acc, a.gravity, a.acc + 3 * std::size_t(i));

@@ -27,6 +27,8 @@ struct ForcePairArgs {
     Real gravity[3] = {0, 0, 0};
     Real* acc = nullptr;   ///< written: a_i (xyz per particle), gravity included
     Real* drho = nullptr;  ///< written when not null: drho_i/dt (He eq. 5)
+    Real nu4 = 0;          ///< 4 nu of the laminar term (forces_kernels.hpp laminar_coefficient); 0: none
+    bool alpha_b_laminar = false;  ///< the laminar term also acts against the boundary (no-slip walls)
 };
 
 /// @brief a_i (and drho_i/dt) of rows[k] (or of row k when rows is null), k in [begin, end).

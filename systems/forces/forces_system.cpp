@@ -9,6 +9,11 @@
 // Corrected pressure gradient (scene `fluid.pressure_gradient: corrected`, Bonet & Lok 1999):
 // grad W_ij in the pressure term becomes (L_i + L_j)/2 grad W_ij, symmetric in i and j, so
 // F_ij = -F_ji still holds; against the boundary L_i grad W_ib.
+// Laminar viscosity (Morris et al. 1997; forces_kernels.hpp laminar_coefficient) when
+// Physics::kinematic_viscosity > 0: fluid pairs, and boundary pairs with v_ib unless the walls
+// are free-slip (boundary_viscosity 0), rho_b = rho0.
+// Continuity density (`fluid.density: continuity`): drho/dt is the density system's
+// (density_system.hpp), so individual stepping leaves it alone here.
 // Individual stepping (He Alg. 2 lines 10-13): active particles only, plus
 // drho_i/dt = sum_j m_j v_ij . grad W_ij + sum_b psi_b v_ib . grad W_ib (He eq. 5) and
 // Delta t_i^raw = min(lambda_v h/|v_i|, lambda_f sqrt(h/|a_i|)) (line 13; the same function
@@ -38,15 +43,16 @@ Access ForcesSystem::access() const {
                    .read_if(m_with_boundary && m_moving_boundary, boundary(comp::velocity))
                    .read_if(m_corrected, fluid(comp::gradient_correction))
                    .read_if(m_individual, res::active_set)
-                   .write_if(m_individual, fluid(comp::drho_dt), fluid(comp::dt_raw), fluid(comp::t_last));
+                   .write_if(m_individual && !m_continuity, fluid(comp::drho_dt))
+                   .write_if(m_individual, fluid(comp::dt_raw), fluid(comp::t_last));
     if (m_individual) a.rows(res::active_set);  // He Alg. 2 lines 10-14: the active rows only
     return a;
 }
 
 void ForcesSystem::register_components(World& w) {
     w.fluid.store.add(comp::acceleration);
+    if (m_individual && !m_continuity) w.fluid.store.add(comp::drho_dt);
     if (m_individual) {
-        w.fluid.store.add(comp::drho_dt);
         w.fluid.store.add(comp::dt_raw);
         w.fluid.store.add(comp::t_last);
     }
@@ -75,12 +81,11 @@ void ForcesSystem::run(Context& ctx) {
     const Real m = ph.mass, alpha = ph.viscosity, c = ph.speed_of_sound, h = ph.h, rho0 = ph.rest_density;
     const Real alpha_b = ph.boundary_viscosity;  // 0: free-slip walls (pressure force only)
     const Vec3 g = ph.gravity;
+    const Real nu4 = Real(4) * ph.kinematic_viscosity, eps_h2 = Real(0.01) * h * h;  // laminar viscosity
     std::span<Real> drho;
     std::span<double> dt_raw;
-    if (m_individual) {
-        drho = ctx.write(fluid(comp::drho_dt));
-        dt_raw = ctx.write(fluid(comp::dt_raw));
-    }
+    if (m_individual && !m_continuity) drho = ctx.write(fluid(comp::drho_dt));
+    if (m_individual) dt_raw = ctx.write(fluid(comp::dt_raw));
     const std::span<const Mat3> L = m_corrected ? ctx.read(fluid(comp::gradient_correction)) : std::span<const Mat3>{};
     const SteppingParams& stepping = m_stepping;
     // The mode and the gradient form are template parameters, so the `global`/`constant` loop
@@ -91,7 +96,8 @@ void ForcesSystem::run(Context& ctx) {
         dt_raw[i] = global_time_step(stepping, h, c, std::sqrt(double(v[i].squaredNorm())),
                                      std::sqrt(double(acc[i].squaredNorm())));
     };
-    auto evaluate = [&]<bool Individual, bool Corrected>(Index i) {
+    // Drho: drho_i/dt is wanted (individual stepping with the summation density).
+    auto evaluate = [&]<bool Drho, bool Corrected>(Index i) {
         const Vec3 xi = x[i], vi = v[i];
         const Real rhoi = rho[i];
         const Real pi = p[i] / (rhoi * rhoi);
@@ -107,7 +113,8 @@ void ForcesSystem::run(Context& ctx) {
                 a -= (m * (pi + p[j] / (rho[j] * rho[j]))) * (Real(0.5) * (L[i] + L[j]) * grad) + (m * visc) * grad;
             else
                 a -= (m * (pi + p[j] / (rho[j] * rho[j]) + visc)) * grad;
-            if constexpr (Individual) div += m * vij.dot(grad);
+            if (nu4 > 0) a += (m * laminar_coefficient(xij.dot(grad), r2, nu4, rhoi, rho[j], eps_h2)) * vij;
+            if constexpr (Drho) div += m * vij.dot(grad);
         }
         if (has_boundary) {
             for (Index b : boundary_nb->of(i)) {
@@ -120,14 +127,13 @@ void ForcesSystem::run(Context& ctx) {
                     a -= (rho0 * vb[b] * Real(2) * pi) * (L[i] * grad) + (rho0 * vb[b] * visc) * grad;
                 else
                     a -= (rho0 * vb[b] * (Real(2) * pi + visc)) * grad;
-                if constexpr (Individual) div += rho0 * vb[b] * vib.dot(grad);  // He eq. 5, boundary term
+                if (nu4 > 0 && alpha_b > 0)  // no-slip walls: the laminar term against v_b
+                    a += (rho0 * vb[b] * laminar_coefficient(xib.dot(grad), r2, nu4, rhoi, rho0, eps_h2)) * vib;
+                if constexpr (Drho) div += rho0 * vb[b] * vib.dot(grad);  // He eq. 5, boundary term
             }
         }
         acc[i] = a + g;
-        if constexpr (Individual) {
-            drho[i] = div;
-            raw_step(i);
-        }
+        if constexpr (Drho) drho[i] = div;
     };
     // The vectorised loop (simulation.simd) for the symmetric gradient; the scalar lambda
     // above is the reference it is tested against, and runs the corrected form.
@@ -154,7 +160,9 @@ void ForcesSystem::run(Context& ctx) {
         vec.rest_density = rho0;
         for (int k = 0; k < 3; ++k) vec.gravity[k] = g[k];
         vec.acc = acc.empty() ? nullptr : acc.data()->data();
-        vec.drho = m_individual ? drho.data() : nullptr;
+        vec.drho = drho.empty() ? nullptr : drho.data();
+        vec.nu4 = nu4;
+        vec.alpha_b_laminar = alpha_b > 0;
     }
     if (!m_individual) {
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 256), [&](const auto& r) {
@@ -179,12 +187,15 @@ void ForcesSystem::run(Context& ctx) {
             if (simd) force_rows_simd(vec, active.data(), r.begin(), r.end());
             for (std::size_t k = r.begin(); k < r.end(); ++k) {
                 const Index i = active[k];
-                if (simd)  // the vectorised loop wrote a_i and drho_i/dt for the whole range
-                    raw_step(i);
-                else if (m_corrected)
-                    evaluate.template operator()<true, true>(i);
-                else
-                    evaluate.template operator()<true, false>(i);
+                if (!simd) {  // (the vectorised loop wrote a_i and drho_i/dt for the whole range)
+                    if (m_continuity)
+                        m_corrected ? evaluate.template operator()<false, true>(i)
+                                    : evaluate.template operator()<false, false>(i);
+                    else
+                        m_corrected ? evaluate.template operator()<true, true>(i)
+                                    : evaluate.template operator()<true, false>(i);
+                }
+                raw_step(i);
                 t_last[i] = now;
                 ++done;
             }

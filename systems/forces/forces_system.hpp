@@ -9,6 +9,9 @@
 /// With `corrected` (scene `fluid.pressure_gradient`) the pressure terms use the corrected
 /// gradient (L_i + L_j)/2 grad W_ij against fluid and L_i grad W_ib against the boundary
 /// (Bonet & Lok 1999; L from GradientCorrectionSystem); viscosity keeps grad W.
+/// With `continuity` (scene `fluid.density: continuity`) drho/dt belongs to the density system,
+/// so individual stepping does not write it here. With Physics::kinematic_viscosity > 0 the
+/// laminar term of Morris et al. 1997 is added (forces_kernels.hpp laminar_coefficient).
 #include "engine/data/scene.hpp"
 #include "engine/graph/system.hpp"
 
@@ -18,11 +21,12 @@ class ForcesSystem final : public System {
 public:
     /// @param stepping the step rules of Delta t_i^raw (individual stepping only).
     explicit ForcesSystem(bool with_boundary, bool individual = false, bool moving_boundary = false,
-                          bool corrected = false, SteppingParams stepping = {})
+                          bool corrected = false, SteppingParams stepping = {}, bool continuity = false)
         : m_with_boundary(with_boundary),
           m_individual(individual),
           m_moving_boundary(moving_boundary),
           m_corrected(corrected),
+          m_continuity(continuity),
           m_stepping(stepping) {}
     std::string name() const override { return "forces"; }
     Access access() const override;
@@ -30,7 +34,7 @@ public:
     void run(Context& ctx) override;
 
 private:
-    bool m_with_boundary, m_individual, m_moving_boundary, m_corrected;
+    bool m_with_boundary, m_individual, m_moving_boundary, m_corrected, m_continuity;
     SteppingParams m_stepping;
 };
 

@@ -48,10 +48,11 @@ Recipe make_wcsph_recipe(const Scene& scene) {
     r.step.push_back(std::make_unique<FluidNeighbourSystem>(individual, !binned));
     if (boundary) r.step.push_back(std::make_unique<BoundaryNeighbourSystem>(individual, !binned));
     if (mode == SteppingMode::Individual) r.step.push_back(std::make_unique<HaloSystem>(boundary));
-    r.step.push_back(std::make_unique<DensitySystem>(boundary, individual));
+    const bool continuity = scene.fluid.density == DensityForm::Continuity;
+    r.step.push_back(std::make_unique<DensitySystem>(boundary, individual, continuity, moving));
     const bool corrected = scene.fluid.pressure_gradient == PressureGradient::Corrected;
     if (corrected) r.step.push_back(std::make_unique<GradientCorrectionSystem>(boundary, individual));
-    r.step.push_back(std::make_unique<ForcesSystem>(boundary, individual, moving, corrected, stepping));
+    r.step.push_back(std::make_unique<ForcesSystem>(boundary, individual, moving, corrected, stepping, continuity));
     r.step.push_back(std::make_unique<StepStatsSystem>(
         individual, binned ? StepStatsSystem::Rows::Active : StepStatsSystem::Rows::All));
     if (binned) {
