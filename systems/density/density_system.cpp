@@ -178,7 +178,7 @@ void DensitySystem::run_continuity(Context& ctx) {
         });
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 2048), [&](const auto& r) {
             for (std::size_t i = r.begin(); i < r.end(); ++i) {
-                if (!std::isnan(p[i])) rho[i] += dt * drho[i];
+                if (!std::isnan(p[i])) rho[i] = std::max(rho[i] + dt * drho[i], rho0);
                 p[i] = tait_pressure(rho[i], rho0, ph.tait_b);
             }
         });
@@ -203,7 +203,7 @@ void DensitySystem::run_continuity(Context& ctx) {
         for (std::size_t k = r.begin(); k < r.end(); ++k) {
             const Index i = active[k];
             drho[i] = rate(i);
-            next[k] = next[k] < 0 ? rho[i] : rho_last[i] + Real(to_seconds(now - t_last[i])) * drho[i];
+            next[k] = next[k] < 0 ? rho[i] : std::max(rho_last[i] + Real(to_seconds(now - t_last[i])) * drho[i], rho0);
         }
     });
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, active.size(), 1024), [&](const auto& r) {

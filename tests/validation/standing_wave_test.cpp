@@ -1,0 +1,125 @@
+// Dissipation measured: a linear standing wave (sloshing mode 1) in a closed tank with free-slip
+// walls (../shared/validation/analytical_references.md; Lamb 1932 sec. 348). Water d = 0.5 m
+// deep in a tank L = 1 m long (and 0.1 m wide, so the flow is two-dimensional), k = pi / L:
+//   period        T = 2 pi / omega,  omega^2 = g k tanh(k d)           (linear theory)
+//   amplitude     a(t) = a0 exp(-2 nu k^2 t)                          (viscous decay; the
+//                 dissipation of the irrotational flow, 4 nu k^2 of the energy, at any depth)
+// The fluid starts flat with the mode's velocity field at its largest (t = 0 of
+// eta = a0 sin(omega t) cos(k x)): u = a0 omega (-cosh(k y) sin(k x), sinh(k y) cos(k x)) / sinh(k d),
+// a0 = 2 cm (k a0 = 0.06). The wave is read from the centre of mass of the fluid, which moves
+// with the surface: x_cm - L/2 = -(2 L / (pi^2 d)) eta(0, t) for this mode; the period is the mean
+// of the zero crossings' spacing and the decay rate the slope of ln |x_cm - L/2| at the extrema.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <cstdio>
+#include <numbers>
+
+#include "engine/data/components.hpp"
+#include "engine/run/simulation.hpp"
+#include "systems/methods/recipes.hpp"
+
+using namespace sph;
+
+namespace {
+
+constexpr double kL = 1.0, kDepth = 0.5, kWidth = 0.1, kA0 = 0.02, kG = 9.81;
+
+struct Wave {
+    double period = 0, decay = 0;  ///< s, 1/s (amplitude)
+    int crossings = 0, extrema = 0;
+};
+
+Wave run_wave(double r, bool continuity, double alpha, double nu, double end) {
+    Scene s;
+    s.name = "standing_wave";
+    s.fluid.particle_radius = r;
+    s.fluid.viscosity = alpha;
+    s.fluid.boundary_viscosity = 0.0;  // free-slip walls: no boundary layers
+    s.fluid.kinematic_viscosity = nu;
+    s.fluid.density = continuity ? DensityForm::Continuity : DensityForm::Summation;
+    if (const char* e = std::getenv("SW_DELTA"); e && continuity) s.fluid.density_diffusion = std::atof(e);
+    if (const char* e = std::getenv("SW_WIDTH")) s.fluid.boundary_viscosity = std::atof(e);
+    s.fluid_blocks.push_back(FluidBlock{Aabb{Vec3d::Zero(), Vec3d(kL, kDepth, kWidth)}, Vec3d::Zero(), true});
+    BoundaryDesc b;
+    b.shape = BoundaryShape::Container;
+    b.box = Aabb{Vec3d::Zero(), Vec3d(kL, kDepth + 0.3, kWidth)};
+    s.boundaries.push_back(b);
+    s.simulation.gravity = Vec3d(0, -kG, 0);
+    s.simulation.frame_rate = 0;
+    s.simulation.end_time = end;
+    auto sim = make_simulation(s);
+    const double k = std::numbers::pi / kL, omega = std::sqrt(kG * k * std::tanh(k * kDepth));
+    {
+        World& w = sim->world();
+        const auto x = w.fluid.store.get(comp::position);
+        auto v = w.fluid.store.get(comp::velocity);
+        const double u0 = kA0 * omega / std::sinh(k * kDepth);
+        for (std::size_t i = 0; i < x.size(); ++i) {
+            const double px = x[i].x(), py = x[i].y();
+            v[i] = Vec3(Real(-u0 * std::cosh(k * py) * std::sin(k * px)), Real(u0 * std::sinh(k * py) * std::cos(k * px)), 0);
+        }
+    }
+    std::vector<double> t, xc;
+    double next = 0;
+    sim->run_until(end, [&](const Simulation& sm) {
+        const World& w = sm.world();
+        if (w.clock.t < next) return;
+        next = w.clock.t + 2e-3;
+        double sum = 0;
+        for (const Vec3& p : w.fluid.store.get(comp::position)) sum += p.x();
+        t.push_back(w.clock.t);
+        xc.push_back(sum / double(w.fluid.size()) - kL / 2);
+    });
+    Wave out;
+    std::vector<double> zeros, ext_t, ext_v;
+    for (std::size_t i = 1; i < t.size(); ++i)
+        if ((xc[i - 1] < 0) != (xc[i] < 0)) zeros.push_back(t[i - 1] + (t[i] - t[i - 1]) * xc[i - 1] / (xc[i - 1] - xc[i]));
+    // The extremum between two crossings (or before the first), with a parabola through the top three samples.
+    std::size_t i0 = 0;
+    for (std::size_t z = 0; z <= zeros.size(); ++z) {
+        const double t_end = z < zeros.size() ? zeros[z] : t.back() + 1;
+        std::size_t best = i0;
+        bool any = false;
+        for (std::size_t i = i0; i < t.size() && t[i] < t_end; ++i, any = true)
+            if (std::abs(xc[i]) > std::abs(xc[best])) best = i;
+        while (i0 < t.size() && t[i0] < t_end) ++i0;
+        if (!any || z == zeros.size() || best == 0 || best + 1 >= t.size()) continue;
+        ext_t.push_back(t[best]);
+        ext_v.push_back(std::log(std::abs(xc[best])));
+    }
+    out.crossings = int(zeros.size());
+    out.extrema = int(ext_t.size());
+    if (zeros.size() >= 2) out.period = 2 * (zeros.back() - zeros.front()) / double(zeros.size() - 1);
+    if (ext_t.size() >= 2) {  // least-squares slope of ln |x_cm| at the extrema
+        double mt = 0, mv = 0;
+        for (std::size_t i = 0; i < ext_t.size(); ++i) mt += ext_t[i], mv += ext_v[i];
+        mt /= double(ext_t.size()), mv /= double(ext_t.size());
+        double num = 0, den = 0;
+        for (std::size_t i = 0; i < ext_t.size(); ++i) num += (ext_t[i] - mt) * (ext_v[i] - mv), den += std::pow(ext_t[i] - mt, 2);
+        out.decay = -num / den;
+    }
+    std::printf("r = %.4g m, %s, alpha %.3g, nu %.3g: period %.4f s (%d crossings), decay %.4f 1/s (%d extrema), x_cm(0..) amplitude %.4g m\n",
+                r, continuity ? "continuity + delta-SPH" : "summation", alpha, nu, out.period, out.crossings, out.decay,
+                out.extrema, ext_v.empty() ? 0.0 : std::exp(ext_v.front()));
+    return out;
+}
+
+}  // namespace
+
+TEST(StandingWave, PeriodAndViscousDecayMatchLinearTheory) {
+    const double k = std::numbers::pi / kL, omega = std::sqrt(kG * k * std::tanh(k * kDepth));
+    const double period = 2 * std::numbers::pi / omega;
+    const double nu = 2e-3;
+    const double decay = 2 * nu * k * k;
+    std::printf("linear theory: period %.4f s, decay %.4f 1/s\n", period, decay);
+    const double r = std::getenv("SW_R") ? std::atof(std::getenv("SW_R")) : 0.01;
+    const Wave w = run_wave(r, true, 0.0, nu, 3.2 * period);
+    if (std::getenv("SW_ONLY")) return;
+    EXPECT_NEAR(w.period / period, 1.0, 0.02);
+    EXPECT_NEAR(w.decay / decay, 1.0, 0.2);
+    const Wave old = run_wave(0.01, false, 0.1, 0.0, 3.2 * period);
+    std::printf("alpha 0.1 summation: period %+.2f %%, decay %.4f 1/s = %.1f x the laminar nu = %.0e\n",
+                100 * (old.period / period - 1), old.decay, old.decay / decay, nu);
+}
