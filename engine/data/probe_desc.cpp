@@ -131,13 +131,25 @@ public:
         const std::string ctx = " for a " + json(type).dump() + " probe";
         if (type == "pressure") {
             d.type = ProbeType::Pressure;
-            keys(p, path, {"type", "name", "rate", "experiment", "point", "source", "radius"}, ctx);
+            keys(p, path, {"type", "name", "rate", "experiment", "point", "source", "radius", "diameter", "normal"}, ctx);
             d.point = vec3(p, path, "point", std::nullopt);
-            d.source = word(p, path, "source", {"fluid", "boundary"}, "fluid") == "fluid" ? PressureSource::Fluid
-                                                                                         : PressureSource::Boundary;
-            if (d.source == PressureSource::Fluid && p.contains("radius"))
-                fail(path + "/radius", p["radius"], "no radius for a fluid-interpolated pressure (source \"fluid\")");
+            const std::string source = word(p, path, "source", {"fluid", "boundary", "sensor"}, "fluid");
+            d.source = source == "fluid"      ? PressureSource::Fluid
+                       : source == "boundary" ? PressureSource::Boundary
+                                              : PressureSource::Sensor;
+            if (d.source != PressureSource::Boundary && p.contains("radius"))
+                fail(path + "/radius", p["radius"], "no radius unless source is \"boundary\" (a sensor has a diameter)");
             d.radius = number(p, path, "radius", 0, false, "a number > 0 (metres)", 0.0);
+            if (d.source != PressureSource::Sensor) {
+                for (const char* k : {"diameter", "normal"})
+                    if (p.contains(k)) fail(path + "/" + k, p[k], std::string("no ") + k + " unless source is \"sensor\"");
+            } else {
+                if (!p.contains("diameter")) fail(path + "/diameter", json(), "the sensor face's diameter (a number > 0, metres)");
+                d.diameter = number(p, path, "diameter", 0, false, "a number > 0 (metres)", 0.0);
+                d.normal = vec3(p, path, "normal", std::nullopt);
+                if (!(d.normal.norm() > 0)) fail(path + "/normal", p["normal"], "a non-zero vector (the wall's normal at the sensor)");
+                d.normal.normalize();
+            }
         } else if (type == "height") {
             d.type = ProbeType::Height;
             keys(p, path, {"type", "name", "rate", "experiment", "from", "to", "method"}, ctx);

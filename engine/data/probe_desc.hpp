@@ -14,9 +14,11 @@
 namespace sph {
 
 enum class ProbeType { Pressure, Height, Front, Fluid };
-/// @brief How a pressure probe reads the pressure: interpolated from the fluid at the point, or
-/// averaged over the boundary particles within `radius` of a wall point.
-enum class PressureSource { Fluid, Boundary };
+/// @brief How a pressure probe reads the pressure: interpolated from the fluid at the point,
+/// averaged over the boundary particles within `radius` of a wall point, or as a wall sensor of
+/// face `diameter` reads: the wall pressure averaged over the disc of the face (normal `normal`),
+/// its dry part counting as 0 (gauge).
+enum class PressureSource { Fluid, Boundary, Sensor };
 /// @brief How a front probe finds the front: the farthest fluid particle with at least
 /// `min_neighbours` neighbours, or the 0.5 level of the colour function along a line.
 enum class FrontMethod { Neighbours, Colour };
@@ -47,6 +49,8 @@ struct ProbeDesc {
     PressureSource source = PressureSource::Fluid;
     Vec3d point{0, 0, 0};      ///< m
     double radius = 0.0;       ///< m, boundary source; default 2 particle spacings (0 = default)
+    double diameter = 0.0;     ///< m, sensor source: the face's diameter
+    Vec3d normal{0, 0, 0};     ///< sensor source: unit normal of the wall at the face
     // height, front (colour)
     Vec3d from{0, 0, 0}, to{0, 0, 0};  ///< m: the line, from its start to its end
     // height

@@ -7,6 +7,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_reduce.h>
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -80,6 +81,45 @@ double boundary_pressure_at(const World& w, const UniformGrid& grid, const Vec3d
     }
     if (count) *count = n;
     return n ? sum / n : 0.0;
+}
+
+double sensor_pressure_at(const World& w, const UniformGrid& grid, const Vec3d& point, const Vec3d& normal,
+                          double diameter, double* wet) {
+    const auto rho = w.fluid.store.get(comp::density);
+    const auto p = w.fluid.store.get(comp::pressure);
+    const Vec3d g = w.physics.gravity.cast<double>();
+    // Two unit vectors in the face.
+    const Vec3d n = normal.normalized();
+    const Vec3d e1 = (std::abs(n.x()) < 0.9 ? Vec3d::UnitX() : Vec3d::UnitY()).cross(n).normalized();
+    const Vec3d e2 = n.cross(e1);
+    const double R = 0.5 * diameter, ds = 0.25 * double(w.physics.spacing);
+    const int rings = std::max(1, int(std::ceil(R / ds)));
+    double sum = 0, area = 0, wet_area = 0;
+    for (int k = 0; k < rings; ++k) {
+        const double r0 = R * k / rings, r1 = R * (k + 1) / rings, rm = 0.5 * (r0 + r1);
+        const double ring_area = M_PI * (r1 * r1 - r0 * r0);
+        const int m = k == 0 ? 1 : std::max(6, int(std::ceil(2 * M_PI * rm / ds)));
+        for (int a = 0; a < m; ++a) {
+            const double phi = 2 * M_PI * (a + 0.5) / m;
+            const Vec3d x = k == 0 && m == 1 ? point : Vec3d(point + rm * (std::cos(phi) * e1 + std::sin(phi) * e2));
+            const Vec3 xf = x.cast<Real>();
+            double pw = 0, ww = 0, colour = 0;
+            Vec3d rw = Vec3d::Zero();
+            grid.for_each_candidate(xf, [&](Index f, const Vec3& xj) {
+                const double wf = w.kernel.w((xf - xj).norm());
+                pw += double(p[f]) * wf;
+                rw += double(rho[f] > Real(0) ? rho[f] : w.physics.rest_density) * (x - xj.cast<double>()) * wf;
+                ww += wf;
+                colour += volume(w, rho[f]) * wf;
+            });
+            const double da = ring_area / m;
+            area += da;
+            // Wet where the colour is at least half a wetted wall's (0.5: no fluid beyond it).
+            if (ww > 0 && colour >= 0.25) sum += da * (pw + g.dot(rw)) / ww, wet_area += da;  // Adami et al. 2012 eq. 27
+        }
+    }
+    if (wet) *wet = area > 0 ? wet_area / area : 0.0;
+    return area > 0 ? sum / area : 0.0;
 }
 
 double iso_distance(const World& w, const UniformGrid& grid, const Vec3d& from, const Vec3d& to) {
@@ -247,8 +287,9 @@ ProbeSet::ProbeSet(const std::vector<ProbeDesc>& probes) : m_probes(probes), m_t
         s.name = d.name;
         switch (d.type) {
             case ProbeType::Pressure:
-                s.columns = d.source == PressureSource::Fluid ? std::vector<std::string>{"t", "p", "colour"}
-                                                              : std::vector<std::string>{"t", "p", "wall_particles"};
+                s.columns = d.source == PressureSource::Fluid      ? std::vector<std::string>{"t", "p", "colour"}
+                            : d.source == PressureSource::Boundary ? std::vector<std::string>{"t", "p", "wall_particles"}
+                                                                   : std::vector<std::string>{"t", "p", "wet"};
                 break;
             case ProbeType::Height:
                 s.columns = {"t", "height", "x", "y", "z"};
@@ -281,6 +322,10 @@ void ProbeSet::sample(std::size_t k, const World& w, const UniformGrid& grid) {
                 double c = 0;
                 const double p = fluid_pressure_at(w, grid, d.point, &c);
                 row.insert(row.end(), {p, c});
+            } else if (d.source == PressureSource::Sensor) {
+                double wet = 0;
+                const double p = sensor_pressure_at(w, grid, d.point, d.normal, d.diameter, &wet);
+                row.insert(row.end(), {p, wet});
             } else {
                 int n = 0;
                 const double radius = d.radius > 0 ? d.radius : 2.0 * double(w.physics.spacing);

@@ -41,6 +41,16 @@ double fluid_pressure_at(const World& w, const UniformGrid& grid, const Vec3d& x
 /// no fluid particle reaches are left out; `count` returns how many were averaged.
 double boundary_pressure_at(const World& w, const UniformGrid& grid, const Vec3d& point, double radius,
                             int* count = nullptr);
+/// @brief What a wall sensor with a circular face reads: the wall pressure averaged over the
+/// face, a disc of `diameter` centred at `point` with unit normal `normal` (area-weighted
+/// quadrature, rings of at most a quarter spacing). The wall pressure at a face point x is
+/// extrapolated from the fluid as for boundary particles (Adami, Hu & Adams 2012 eq. 27,
+/// static wall): sum_f (p_f + rho_f g . (x - x_f)) W / sum_f W. A point whose colour
+/// sum_f V_f W is below 0.25 (half of a wetted wall's 0.5, there being no fluid beyond the wall)
+/// is dry and reads 0 (gauge), as a sensor face in air does. `wet` receives the wetted share of
+/// the face's area.
+double sensor_pressure_at(const World& w, const UniformGrid& grid, const Vec3d& point, const Vec3d& normal,
+                          double diameter, double* wet = nullptr);
 /// @brief Distance from `from` along the segment to the farthest 0.5-crossing of the colour
 /// function from wet (c >= 0.5) to dry (samples a quarter spacing apart, then bisection to
 /// 0.001 spacing); 0 when no sample is wet, the length when the end is wet.
