@@ -27,4 +27,26 @@ struct KernelSumArgs {
 void kernel_sums_simd(const KernelSumArgs& a, const Index* rows, std::size_t begin, std::size_t end, Real* fluid_sum,
                       Real* boundary_sum);
 
+/// @brief The continuity density's drho_i/dt (density_kernels.hpp: He eq. 5 plus the delta-SPH
+/// diffusion), the formula of DensitySystem's scalar `rate`, vectorised across the lists.
+struct ContinuityRateArgs {
+    const Real* x = nullptr;    ///< fluid positions, xyz per particle
+    const Real* v = nullptr;    ///< fluid velocities, xyz per particle
+    const Real* rho = nullptr;  ///< fluid densities (all > 0)
+    const NeighbourLists* fluid = nullptr;
+    const Real* xb = nullptr;        ///< boundary positions (nullptr: no boundary term)
+    const Real* volume_b = nullptr;
+    const Real* vel_b = nullptr;     ///< boundary velocities, xyz (nullptr: static walls)
+    const NeighbourLists* boundary = nullptr;
+    const CubicSpline* kernel = nullptr;
+    Real mass = 0, rest_density = 0;
+    Real diffusion = 0;        ///< delta h c_s (0: no diffusion term)
+    Real eps_h2 = 0;           ///< 0.01 h^2
+    Real g_h[3] = {0, 0, 0};   ///< (rho0 / c_s^2) g: rho^H_ij = g_h . x_ij
+};
+
+/// @brief out[k - begin] = drho_i/dt for k in [begin, end), i = rows ? rows[k] : k.
+void continuity_rates_simd(const ContinuityRateArgs& a, const Index* rows, std::size_t begin, std::size_t end,
+                           Real* out);
+
 }  // namespace sph

@@ -163,6 +163,41 @@ void DensitySystem::run_continuity(Context& ctx) {
             }
         return m * div + rho0 * bdiv + diffusion * m * diffused;
     };
+    // The vectorised rates (simulation.simd): the same formula; the scalar `rate` is the reference.
+    ContinuityRateArgs vec;
+    vec.x = x.empty() ? nullptr : x.data()->data();
+    vec.v = v.empty() ? nullptr : v.data()->data();
+    vec.rho = rho.data();
+    vec.fluid = &fluid_nb;
+    if (has_boundary) {
+        vec.xb = xb.data()->data();
+        vec.volume_b = vb.data();
+        vec.vel_b = vel_b.empty() ? nullptr : vel_b.data()->data();
+        vec.boundary = boundary_nb;
+    }
+    vec.kernel = &kernel;
+    vec.mass = m;
+    vec.rest_density = rho0;
+    vec.diffusion = diffusion;
+    vec.eps_h2 = eps_h2;
+    for (int k = 0; k < 3; ++k) vec.g_h[k] = g_h[k];
+    // D_i of rows[k] (or row k), k in [begin, end), into drho.
+    auto rates = [&](const Index* rows, std::size_t begin, std::size_t end) {
+        if (!ph.simd) {
+            for (std::size_t k = begin; k < end; ++k) {
+                const Index i = rows ? rows[k] : Index(k);
+                drho[i] = rate(i);
+            }
+            return;
+        }
+        constexpr std::size_t kChunk = 256;
+        std::array<Real, kChunk> out{};
+        for (std::size_t b = begin; b < end; b += kChunk) {
+            const std::size_t e = std::min(end, b + kChunk);
+            continuity_rates_simd(vec, rows, b, e, out.data());
+            for (std::size_t k = b; k < e; ++k) drho[rows ? rows[k] : Index(k)] = out[k - b];
+        }
+    };
     const Tick now = ctx.clock().t_ticks;
     if (!m_individual) {
         // Every row: D_i from the densities of time t_0 (all rows read before any is advanced).
@@ -174,7 +209,7 @@ void DensitySystem::run_continuity(Context& ctx) {
                 if (rho[i] == Real(0)) start(Index(i)), p[i] = std::numeric_limits<Real>::quiet_NaN();
         });
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 256), [&](const auto& r) {
-            for (std::size_t i = r.begin(); i < r.end(); ++i) drho[i] = rate(Index(i));
+            rates(nullptr, r.begin(), r.end());
         });
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 2048), [&](const auto& r) {
             for (std::size_t i = r.begin(); i < r.end(); ++i) {
@@ -200,9 +235,9 @@ void DensitySystem::run_continuity(Context& ctx) {
         }
     });
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, active.size(), 256), [&](const auto& r) {
+        rates(active.data(), r.begin(), r.end());
         for (std::size_t k = r.begin(); k < r.end(); ++k) {
             const Index i = active[k];
-            drho[i] = rate(i);
             next[k] = next[k] < 0 ? rho[i] : std::max(rho_last[i] + Real(to_seconds(now - t_last[i])) * drho[i], rho0);
         }
     });

@@ -37,8 +37,9 @@ struct Fixture {
     std::vector<std::unique_ptr<System>> systems;
     bool boundary;
 
-    Fixture(bool with_boundary, Vec3d gravity, bool jittered, double nu = 0) : boundary(with_boundary) {
+    Fixture(bool with_boundary, Vec3d gravity, bool jittered, double nu = 0, bool simd = true) : boundary(with_boundary) {
         Scene s = test::tank_scene(Vec3d(0.2, 0.2, 0.2), Vec3d(0.3, 0.3, 0.3));
+        s.simulation.simd = simd;  // the vectorised rates or the scalar reference
         if (!with_boundary) s.boundaries.clear();
         s.simulation.gravity = gravity;
         s.fluid.viscosity = 0;
@@ -109,8 +110,11 @@ double brute_rate(const World& w, std::span<const Real> rho, std::size_t i, bool
 
 }  // namespace
 
-TEST(ContinuityDensity, RateMatchesBruteForceAndAdvancesTheDensity) {
-    Fixture f(true, Vec3d(0, -9.81, 0), true);
+class ContinuityRatePath : public ::testing::TestWithParam<bool> {};
+
+TEST_P(ContinuityRatePath, RateMatchesBruteForceAndAdvancesTheDensity) {
+    Fixture f(true, Vec3d(0, -9.81, 0), true, 0, GetParam());
+    ASSERT_EQ(f.w.physics.simd, GetParam());
     World& w = f.w;
     std::mt19937 rng(3);
     std::uniform_real_distribution<Real> u(-1, 1);
@@ -134,6 +138,9 @@ TEST(ContinuityDensity, RateMatchesBruteForceAndAdvancesTheDensity) {
     // max(rho + dt drho/dt, rho0) in float: the rounding of rho (6e-5 kg/m^3 at 1000) is the bound.
     EXPECT_LT(step_dev, 1.2e-4);
 }
+
+INSTANTIATE_TEST_SUITE_P(BothLoops, ContinuityRatePath, ::testing::Bool(),
+                         [](const auto& info) { return info.param ? "Vectorised" : "Scalar"; });
 
 TEST(ContinuityDensity, DiffusionOfAQuadraticDensityIsItsLaplacian) {
     Fixture f(false, Vec3d::Zero(), false);
