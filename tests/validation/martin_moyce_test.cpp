@@ -61,6 +61,15 @@ struct MmErrors {
     std::size_t particles = 0;
 };
 
+/// The colour front's error (the 0.5 level of the colour function on the floor), as `front`.
+ShiftedError colour_front_error(const std::vector<std::pair<std::string, nlohmann::json>>& overrides) {
+    const Scene scene = load_scene(kScene, overrides);
+    const ProbeSet probes = run_with_probes(scene, nullptr);
+    const Points front = dimensionless(probes.series("front_colour"), "front", std::sqrt(2 * kG / kA), 1 / kA);
+    const Points exp = read_points(kData + "martin_moyce_1952_n2-2_front_table2.csv", "T", "Z");
+    return front_error(front, exp, 0.8, 3.3, 0.2);
+}
+
 MmErrors martin_moyce(const std::vector<std::pair<std::string, nlohmann::json>>& overrides) {
     const Scene scene = load_scene(kScene, overrides);
     MmErrors e;
@@ -145,6 +154,32 @@ TEST(MartinMoyceResolution, FrontWithinFivePercentAndResidualHeightErrorFalls) {
         }
     }
     EXPECT_LT(median_eta[1], median_eta[0]) << "median max |d eta|: a/18 against a/8";
+}
+
+// The continuity density with delta-SPH (fluid.density: continuity; the scene's alpha 0.02 and
+// `global`): the colour front's RMS error falls with resolution and is below 1.5 % at a/12
+// (issue 16). Median of three runs per spacing (lambda_c 0.36 / 0.40 / 0.44); the continuity
+// runs agree to 0.01 % (docs/results/validation.md). Measured 2026-12-03: 2.58 / 1.47 / 1.42 %
+// at a/8, a/12, a/18 (the summation density: 2.18 / 1.16 / 2.71 %). Held: a/12 below 1.5 %
+// (a 2 % margin: the measured value, not a bound with room), a/12 below a/8, a/18 below 0.6 of
+// a/8 (measured 0.55).
+TEST(MartinMoyceContinuity, ColourFrontErrorFallsWithResolution) {
+    std::vector<double> median;
+    for (const double n : {8.0, 12.0, 18.0}) {
+        std::vector<double> e;
+        for (const double lambda_c : {0.36, 0.40, 0.44})
+            e.push_back(colour_front_error({{"/simulation/scale", std::pow(n / 12.0, 3.0)},
+                                            {"/simulation/stepping/lambda_c", lambda_c},
+                                            {"/fluid/density", "continuity"}})
+                            .rms_rel);
+        std::sort(e.begin(), e.end());
+        median.push_back(e[1]);
+        std::printf("martin_moyce [continuity, a/%.0f]: colour front RMS relative error %.2f %% (runs %.2f %.2f %.2f)\n",
+                    n, 100 * e[1], 100 * e[0], 100 * e[1], 100 * e[2]);
+    }
+    EXPECT_LT(median[1], 0.015) << "a/12";
+    EXPECT_LT(median[1], median[0]) << "a/12 against a/8";
+    EXPECT_LT(median[2], 0.6 * median[0]) << "a/18 against a/8";
 }
 
 // Koshizuka & Oka 1996. Tolerance 8 %: the data are digitised from a figure (no tabulated
