@@ -226,7 +226,8 @@ void DensitySystem::run_continuity(Context& ctx) {
     auto rho_last = ctx.write(fluid(comp::density_last));
     const auto t_last = ctx.read(fluid(comp::t_last));
     // New rows (density 0) are started first, so that no rate reads a density of 0.
-    std::vector<Real> next(active.size());
+    std::vector<Real>& next = m_next;  // kept between steps: no allocation per step
+    next.resize(active.size());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, active.size(), 1024), [&](const auto& r) {
         for (std::size_t k = r.begin(); k < r.end(); ++k) {
             const Index i = active[k];

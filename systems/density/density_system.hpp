@@ -18,6 +18,7 @@
 /// emitter just added) starts from its summation density, at least rho0 (a free-surface
 /// particle lacks neighbours; its deficit would stay in the integrated density).
 #include <cstdint>
+#include <vector>
 
 #include "engine/graph/system.hpp"
 
@@ -51,6 +52,7 @@ public:
 private:
     void run_continuity(Context& ctx);
     bool m_with_boundary, m_individual, m_continuity, m_moving_boundary;
+    std::vector<Real> m_next;  ///< individual continuity: the active rows' new densities (scratch)
 };
 
 }  // namespace sph

@@ -130,9 +130,9 @@ void check_tank(const std::string& mode, bool continuity) {
             p.standard_error += one.standard_error / 5;  // an upper bound: the lines correlate
         }
         const double wall = mean_after(probes.series(std::string("wall_y") + y), "p", t0).mean;
-        std::printf("hydrostatic [%s]: depth %.3f m  rho0 g d = %.1f Pa  interpolated %.1f Pa (%+.2f %%, standard "
+        std::printf("hydrostatic [%s%s]: depth %.3f m  rho0 g d = %.1f Pa  interpolated %.1f Pa (%+.2f %%, standard "
                     "error %.2f %%)  wall %.1f Pa (%+.2f %%)\n",
-                    mode.c_str(), depth, expect, p.mean, 100 * (p.mean - expect) / expect,
+                    mode.c_str(), continuity ? ", continuity" : "", depth, expect, p.mean, 100 * (p.mean - expect) / expect,
                     100 * p.standard_error / expect, wall, 100 * (wall - expect) / expect);
         // The 1 kHz samples' spread (one line's standard deviation, the mean of the five).
         double sd = 0;
