@@ -94,7 +94,7 @@ void ForcesSystem::run(Context& ctx) {
     // reproduce `global`), from the particle's velocity and its new acceleration.
     auto raw_step = [&](Index i) {
         dt_raw[i] = global_time_step(stepping, h, c, std::sqrt(double(v[i].squaredNorm())),
-                                     std::sqrt(double(acc[i].squaredNorm())));
+                                     std::sqrt(double(acc[i].squaredNorm())), ph.kinematic_viscosity);
     };
     // Drho: drho_i/dt is wanted (individual stepping with the summation density).
     auto evaluate = [&]<bool Drho, bool Corrected>(Index i) {

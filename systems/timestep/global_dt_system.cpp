@@ -10,8 +10,9 @@
 
 namespace sph {
 
-double global_time_step(const SteppingParams& p, double h, double c_s, double v_max, double a_max) {
+double global_time_step(const SteppingParams& p, double h, double c_s, double v_max, double a_max, double nu) {
     double dt = p.dt_max;
+    if (nu > 0) dt = std::min(dt, 0.125 * (0.5 * h) * (0.5 * h) / nu);  // Morris et al. 1997 eq. 12
     if (v_max > 0) dt = std::min(dt, p.lambda_v * h / v_max);       // eq. 6
     if (a_max > 0) dt = std::min(dt, p.lambda_f * std::sqrt(h / a_max));  // eq. 7
     if (p.acoustic) dt = std::min(dt, p.lambda_c * h / (c_s + v_max));
@@ -23,7 +24,8 @@ Access GlobalDtSystem::access() const { return Access().read(res::stats).write(r
 void GlobalDtSystem::run(Context& ctx) {
     const StepStats& st = ctx.read(res::stats);
     StepSize& s = ctx.write(res::dt);
-    s.dt_stable = global_time_step(m_stepping, ctx.physics().h, ctx.physics().speed_of_sound, st.v_max, st.a_max);
+    const Physics& ph = ctx.physics();
+    s.dt_stable = global_time_step(m_stepping, ph.h, ph.speed_of_sound, st.v_max, st.a_max, ph.kinematic_viscosity);
     // The last step is shortened so that the run ends exactly at its end time.
     s.set_clipped(s.dt_stable, ctx.clock());
 }

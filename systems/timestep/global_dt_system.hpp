@@ -10,7 +10,9 @@
 namespace sph {
 
 /// @brief The step of He eq. 6-8 (+ acoustic) for given maxima; infinity-safe for v = a = 0.
-double global_time_step(const SteppingParams& p, double h, double c_s, double v_max, double a_max);
+/// With a laminar viscosity nu > 0 (fluid.kinematic_viscosity) also the viscous diffusion limit
+/// of Morris et al. 1997 (eq. 12), dt <= 0.125 h_s^2 / nu with h_s = h / 2 the smoothing length.
+double global_time_step(const SteppingParams& p, double h, double c_s, double v_max, double a_max, double nu = 0);
 
 class GlobalDtSystem final : public System {
 public:

@@ -79,6 +79,15 @@ TEST(GlobalTimeStep, AcousticConditionWins) {
     EXPECT_DOUBLE_EQ(global_time_step(params(false), kH, kCs, 2.0, 5.0), kCflDt);
 }
 
+// Viscous limit wins (Morris et al. 1997 eq. 12): nu = 0.1 m^2/s, v = 2 m/s, a = 5 m/s^2.
+//   eq. 6, 7 as above: 0.002 s, 0.00447 s
+//   viscous: 0.125 * (0.04 / 2)^2 / 0.1 = 0.125 * 4e-4 / 0.1 = 5e-4 s
+// and with nu = 0 the CFL's 0.002 s again.
+TEST(GlobalTimeStep, ViscousLimitWinsWithALaminarViscosity) {
+    EXPECT_DOUBLE_EQ(global_time_step(params(false), kH, kCs, 2.0, 5.0, 0.1), 5e-4);
+    EXPECT_DOUBLE_EQ(global_time_step(params(false), kH, kCs, 2.0, 5.0, 0.0), kCflDt);
+}
+
 TEST(GlobalTimeStep, DtMaxCapWins) {
     EXPECT_DOUBLE_EQ(global_time_step(params(false), kH, kCs, 0.1, 0.5), kCapDt);
     // A larger cap lets eq. 7 through: 0.0141421356 s.
