@@ -415,7 +415,13 @@ nlohmann::json Recorder::finish(const Simulation& sim, double wall_seconds, int 
                     {"support_radius", w.physics.h},
                     {"mass", w.physics.mass},
                     {"speed_of_sound", w.physics.speed_of_sound},
-                    {"fluid_height", w.physics.fluid_height}};
+                    {"fluid_height", w.physics.fluid_height},
+                    {"rest_density", w.physics.rest_density},
+                    {"artificial_viscosity", w.physics.viscosity},
+                    {"boundary_viscosity", w.physics.boundary_viscosity},
+                    {"density", w.physics.continuity ? "continuity" : "summation"},
+                    {"density_diffusion", w.physics.density_diffusion},
+                    {"kinematic_viscosity", w.physics.kinematic_viscosity}};
     j["frames"] = m_frame;
     if (m_surface_frames > 0) {
         // The surface's cost per frame, also in steps of this run (an average step's time in
