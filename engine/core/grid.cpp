@@ -40,7 +40,7 @@ UniformGrid::UniformGrid(const Aabb& box, Real cell_size, const std::string& wha
 
 std::size_t UniformGrid::bytes() const {
     return m_cell_start.capacity() * sizeof(Index) +
-           m_sorted_index.capacity() * sizeof(Index) + 3 * m_sx.capacity() * sizeof(Real);
+           m_sorted_index.capacity() * sizeof(Index);
 }
 
 void UniformGrid::build(std::span<const Vec3> positions) {
@@ -61,39 +61,33 @@ void UniformGrid::build(std::span<const Vec3> positions) {
     // The scatter advanced each cell's start to its end (the next cell's start): shift back.
     std::copy_backward(m_cell_start.begin(), m_cell_start.begin() + std::ptrdiff_t(cells), m_cell_start.end());
     m_cell_start[0] = 0;
-    // The padding slots hold a point far outside every query's range, so a whole vector
-    // loaded at the end of the last range filters them out.
-    for (auto* axis : {&m_sx, &m_sy, &m_sz}) {
-        axis->resize(n + kPadding);
-        std::fill(axis->begin() + std::ptrdiff_t(n), axis->end(), std::numeric_limits<Real>::max());
-    }
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const auto& r) {
-        for (std::size_t k = r.begin(); k < r.end(); ++k) {
-            const Vec3& x = positions[m_sorted_index[k]];
-            m_sx[k] = x.x();
-            m_sy[k] = x.y();
-            m_sz[k] = x.z();
-        }
-    });
 }
 
 std::size_t NeighbourLists::bytes() const {
-    std::size_t b = (count.capacity() + indices.capacity() + start.capacity()) * sizeof(Index);
+    std::size_t b = (count.capacity() + indices.capacity() + end.capacity() + queried.capacity()) * sizeof(Index);
     for (const auto& block : blocks) b += block.capacity() * sizeof(Index);
     return b;
 }
 
 std::size_t NeighbourLists::total() const {
     return tbb::parallel_reduce(
-        tbb::blocked_range<std::size_t>(0, count.size(), 8192), std::size_t(0),
+        tbb::blocked_range<std::size_t>(0, rows(), 8192), std::size_t(0),
         [&](const auto& r, std::size_t s) {
-            for (std::size_t i = r.begin(); i < r.end(); ++i) s += count[i];
+            for (std::size_t i = r.begin(); i < r.end(); ++i) s += size_of(Index(i));
             return s;
         },
         std::plus<>());
 }
 
-void CandidateCache::fill(const UniformGrid& grid, const Vec3& at, std::int64_t at_cell) {
+std::vector<Index> NeighbourLists::counts() const {
+    if (!compact()) return count;
+    std::vector<Index> c(rows());
+    for (std::size_t i = 0; i < c.size(); ++i) c[i] = size_of(Index(i));
+    return c;
+}
+
+void CandidateCache::fill(const UniformGrid& grid, std::span<const Vec3> positions, const Vec3& at,
+                          std::int64_t at_cell) {
     const CandidateRanges ranges = grid.candidate_ranges(at);
     cell = at_cell;
     count = ranges.total;
@@ -108,12 +102,14 @@ void CandidateCache::fill(const UniformGrid& grid, const Vec3& at, std::int64_t 
     const Index* sorted_index = grid.sorted_index().data();
     std::size_t k = 0;
     for (int r = 0; r < ranges.count; ++r) {
-        const std::size_t b = ranges.begin[r], n = ranges.end[r] - ranges.begin[r];
-        std::copy_n(grid.sorted_x() + b, n, x.begin() + std::ptrdiff_t(k));
-        std::copy_n(grid.sorted_y() + b, n, y.begin() + std::ptrdiff_t(k));
-        std::copy_n(grid.sorted_z() + b, n, z.begin() + std::ptrdiff_t(k));
-        std::copy_n(sorted_index + b, n, index.begin() + std::ptrdiff_t(k));
-        k += n;
+        for (Index s = ranges.begin[r]; s < ranges.end[r]; ++s, ++k) {
+            const Index j = sorted_index[s];
+            const Vec3& p = positions[j];
+            x[k] = p.x();
+            y[k] = p.y();
+            z[k] = p.z();
+            index[k] = j;
+        }
     }
 }
 
@@ -142,30 +138,40 @@ Index filter(const CandidateCache& cache, const Vec3& xi, Index self, Real r2, I
 }
 
 /// The cache of the query's cell, refilled when the query moved to another cell.
-CandidateCache& cache_for(const UniformGrid& grid, CandidateCache& cache, const Vec3& xi) {
+CandidateCache& cache_for(const UniformGrid& grid, std::span<const Vec3> grid_positions, CandidateCache& cache,
+                          const Vec3& xi) {
     const std::int64_t cell = grid.cell_of(xi);
-    if (cell != cache.cell) cache.fill(grid, xi, cell);
+    if (cell != cache.cell) cache.fill(grid, grid_positions, xi, cell);
     return cache;
 }
 
 /// Every list (or the subset's), back to back per block of query particles, written straight
 /// into the block (no copy): a block grows when its next query's candidates might not fit.
-void build_compact(const UniformGrid& grid, std::span<const Vec3> query_positions, Real r2, bool exclude_self,
+/// A subset build rewrites the ends of every row in the blocks it touches and empties the blocks
+/// of the last subset: O(kBlock) per block touched, not O(n).
+void build_compact(const UniformGrid& grid, std::span<const Vec3> grid_positions,
+                   std::span<const Vec3> query_positions, Real r2, bool exclude_self,
                    const QuerySubset& subset, NeighbourLists& lists, bool simd) {
     const std::size_t n = query_positions.size();
     constexpr std::size_t B = NeighbourLists::kBlock;
     const bool every = subset.all;
-    if (lists.capacity != 0 || lists.count.size() != n) {  // from the slab layout or another size
+    if (lists.capacity != 0 || lists.end.size() != n) {  // from the slab layout or another size
         lists.capacity = 0;
         std::vector<Index>().swap(lists.indices);
-        lists.count.assign(n, 0);
-        lists.start.assign(n, 0);
+        std::vector<Index>().swap(lists.count);
+        lists.end.assign(n, 0);
         lists.queried.clear();
     }
     lists.blocks.resize((n + B - 1) / B);
-    // A subset build empties the last subset's lists (the only non-empty ones besides its own),
-    // so its cost follows the two subsets, not n.
-    for (Index i : lists.queried) lists.count[i] = lists.start[i] = 0;
+    // The last subset's blocks hold the only other non-empty lists: empty them (this build
+    // rewrites the blocks it touches).
+    if (!every)
+        for (std::size_t k = 0; k < lists.queried.size(); ++k) {
+            const std::size_t b = lists.queried[k] / B;
+            if (k > 0 && lists.queried[k - 1] / B == b) continue;
+            std::fill(lists.end.begin() + std::ptrdiff_t(b * B), lists.end.begin() + std::ptrdiff_t(std::min(n, (b + 1) * B)),
+                      Index(0));
+        }
     // The query rows by block: [first[k], first[k + 1]) of `rows` fall in one block.
     const std::span<const Index> rows = subset.indices;
     std::vector<std::size_t> first;
@@ -179,31 +185,37 @@ void build_compact(const UniformGrid& grid, std::span<const Vec3> query_position
         CandidateCache& cache = caches.local();
         for (std::size_t job = r.begin(); job < r.end(); ++job) {
             const std::size_t b = every ? job : rows[first[job]] / B;
-            const std::size_t q_begin = every ? b * B : first[job];
-            const std::size_t q_end = every ? std::min(n, (b + 1) * B) : first[job + 1];
+            const std::size_t row_end = std::min(n, (b + 1) * B);
+            std::size_t k = every ? 0 : first[job];  // the next subset row
+            const std::size_t k_end = every ? 0 : first[job + 1];
             std::vector<Index>& buf = lists.blocks[b];
-            std::size_t used = 0;
-            for (std::size_t q = q_begin; q < q_end; ++q) {
-                const std::size_t i = every ? q : rows[q];
+            std::size_t used = 0, peak = NeighbourLists::kSlack;
+            for (std::size_t i = b * B; i < row_end; ++i) {
+                if (!every && !(k < k_end && rows[k] == i)) {  // not queried: empty
+                    lists.end[i] = Index(used);
+                    continue;
+                }
+                ++k;
                 const Vec3 xi = query_positions[i];
-                cache_for(grid, cache, xi);
+                cache_for(grid, grid_positions, cache, xi);
                 // Room for every candidate plus a vector of slack (the vectorised filter's
                 // whole-vector stores, and the readers' whole-vector loads).
                 const std::size_t need = used + cache.count + NeighbourLists::kSlack;
-                if (buf.size() < need) {  // grows by an eighth: a block's lists change little per step
-                    buf.reserve(std::max(need, buf.size() + buf.size() / 8));
-                    buf.resize(buf.capacity());
+                peak = std::max(peak, need);
+                if (buf.size() < need) {  // grows by a 32nd over the need: a block's lists change little per step
+                    std::vector<Index> grown(need + need / 32);
+                    std::copy_n(buf.data(), used, grown.data());
+                    buf.swap(grown);
                 }
-                const Index c = filter(cache, xi, exclude_self ? Index(i) : kNoSelf, r2, buf.data() + used, simd);
-                lists.start[i] = Index(used);
-                lists.count[i] = c;
-                used += c;
+                used += filter(cache, xi, exclude_self ? Index(i) : kNoSelf, r2, buf.data() + used, simd);
+                lists.end[i] = Index(used);
             }
-            // A block that needs less than half of what it holds gives the rest back (on full
-            // builds: a subset's share of a block changes from step to step).
-            if (every && buf.size() > 2 * (used + NeighbourLists::kSlack) + 4096) {
-                buf.resize(used + NeighbourLists::kSlack);
-                buf.shrink_to_fit();
+            // A block holding more than a 16th above what this build needed at its peak gives
+            // the rest back, keeping a 32nd (lists thin out as a flow spreads from its start).
+            if (every && buf.size() > peak + peak / 16) {
+                std::vector<Index> trimmed(std::max(peak + peak / 32, used + NeighbourLists::kSlack));
+                std::copy_n(buf.data(), used, trimmed.data());
+                buf.swap(trimmed);
             }
         }
     });
@@ -214,24 +226,27 @@ void build_compact(const UniformGrid& grid, std::span<const Vec3> query_position
 }
 
 /// The lists of the subset, each in its fixed slot of `capacity` entries.
-void build_slab(const UniformGrid& grid, std::span<const Vec3> query_positions, Real r2, bool exclude_self,
+void build_slab(const UniformGrid& grid, std::span<const Vec3> grid_positions,
+                std::span<const Vec3> query_positions, Real r2, bool exclude_self,
                 const QuerySubset& subset, NeighbourLists& lists, bool simd) {
     const std::size_t n = query_positions.size();
     if (lists.capacity == 0) {  // first build, or from the compact layout (whose lists are kept)
+        std::vector<Index> counts = lists.counts();
         Index longest = 0;
-        for (Index c : lists.count) longest = std::max(longest, c);
+        for (Index c : counts) longest = std::max(longest, c);
         const Index cap = std::max<Index>(48, (longest + 15) / 16 * 16);
-        if (lists.count.size() == n) {
+        if (counts.size() == n) {
             std::vector<Index> slab(n * std::size_t(cap));
             for (std::size_t i = 0; i < n; ++i) {
                 const auto l = lists.of(Index(i));
                 std::copy(l.begin(), l.end(), slab.data() + i * cap);
             }
             lists.indices.swap(slab);
+            lists.count.swap(counts);
         }
         lists.capacity = cap;
         lists.queried.clear();
-        std::vector<Index>().swap(lists.start);
+        std::vector<Index>().swap(lists.end);
         std::vector<std::vector<Index>>().swap(lists.blocks);
     }
     if (lists.count.size() != n) lists.count.assign(n, 0);
@@ -250,7 +265,7 @@ void build_slab(const UniformGrid& grid, std::span<const Vec3> query_positions, 
             for (std::size_t q = r.begin(); q < r.end(); ++q) {
                 const Index i = subset.all ? Index(q) : subset.indices[q];
                 const Vec3 xi = query_positions[i];
-                cache_for(grid, cache, xi);
+                cache_for(grid, grid_positions, cache, xi);
                 if (found.size() < cache.count + NeighbourLists::kSlack)
                     found.resize(2 * cache.count + NeighbourLists::kSlack);
                 const Index c = filter(cache, xi, exclude_self ? i : kNoSelf, r2, found.data(), simd);
@@ -269,7 +284,7 @@ void build_slab(const UniformGrid& grid, std::span<const Vec3> query_positions, 
         lists.indices.clear();
         if (!subset.all) {
             // The other particles' lists must move to the new layout too: rebuild them all.
-            build_slab(grid, query_positions, r2, exclude_self, QuerySubset{}, lists, simd);
+            build_slab(grid, grid_positions, query_positions, r2, exclude_self, QuerySubset{}, lists, simd);
             return;
         }
     }
@@ -277,18 +292,20 @@ void build_slab(const UniformGrid& grid, std::span<const Vec3> query_positions, 
 
 }  // namespace
 
-void build_neighbour_lists(const UniformGrid& grid, std::span<const Vec3> query_positions,
-                           Real radius, bool exclude_self, const QuerySubset& subset,
-                           NeighbourLists& lists, bool simd) {
+void build_neighbour_lists(const UniformGrid& grid, std::span<const Vec3> grid_positions,
+                           std::span<const Vec3> query_positions, Real radius, bool exclude_self,
+                           const QuerySubset& subset, NeighbourLists& lists, bool simd) {
+    if (grid_positions.size() < grid.particle_count())
+        throw std::logic_error("build_neighbour_lists: the grid holds more particles than the positions given");
     const Real r2 = radius * radius;
     if (subset.all || !subset.keep_others)
-        build_compact(grid, query_positions, r2, exclude_self, subset, lists, simd);
+        build_compact(grid, grid_positions, query_positions, r2, exclude_self, subset, lists, simd);
     else
-        build_slab(grid, query_positions, r2, exclude_self, subset, lists, simd);
+        build_slab(grid, grid_positions, query_positions, r2, exclude_self, subset, lists, simd);
 }
 
 void NeighbourLists::permute(std::span<const Index> perm, bool remap_entries) {
-    const std::size_t n = count.size();
+    const std::size_t n = rows();
     if (n == 0 || perm.size() != n) return;
     std::vector<Index> inverse;
     if (remap_entries || !queried.empty()) {
@@ -301,8 +318,8 @@ void NeighbourLists::permute(std::span<const Index> perm, bool remap_entries) {
         const auto src = of(from);
         for (std::size_t k = 0; k < src.size(); ++k) dst[k] = remap_entries ? inverse[src[k]] : src[k];
     };
-    std::vector<Index> new_count(n);
     if (!compact()) {
+        std::vector<Index> new_count(n);
         std::vector<Index> new_indices(indices.size());
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const auto& r) {
             for (std::size_t i = r.begin(); i < r.end(); ++i) {
@@ -314,60 +331,58 @@ void NeighbourLists::permute(std::span<const Index> perm, bool remap_entries) {
         indices.swap(new_indices);
         return;
     }
-    std::vector<Index> new_start(n);
+    std::vector<Index> new_end(n);
     std::vector<std::vector<Index>> new_blocks(blocks.size());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks.size(), 1), [&](const auto& r) {
         for (std::size_t b = r.begin(); b < r.end(); ++b) {
-            const std::size_t end = std::min(n, (b + 1) * kBlock);
+            const std::size_t last = std::min(n, (b + 1) * kBlock);
             std::size_t used = 0;
-            for (std::size_t i = b * kBlock; i < end; ++i) used += count[perm[i]];
+            for (std::size_t i = b * kBlock; i < last; ++i) used += size_of(perm[i]);
             new_blocks[b].resize(used + kSlack);
             used = 0;
-            for (std::size_t i = b * kBlock; i < end; ++i) {
-                new_count[i] = count[perm[i]];
-                new_start[i] = Index(used);
+            for (std::size_t i = b * kBlock; i < last; ++i) {
                 copy_list(perm[i], new_blocks[b].data() + used);
-                used += new_count[i];
+                used += size_of(perm[i]);
+                new_end[i] = Index(used);
             }
         }
     });
-    count.swap(new_count);
-    start.swap(new_start);
+    end.swap(new_end);
     blocks.swap(new_blocks);
 }
 
 std::vector<Index> NeighbourLists::concatenated() const {
     std::vector<Index> out;
     out.reserve(total());
-    for (std::size_t i = 0; i < count.size(); ++i) {
+    for (std::size_t i = 0; i < rows(); ++i) {
         const auto l = of(Index(i));
         out.insert(out.end(), l.begin(), l.end());
     }
     return out;
 }
 
-void NeighbourLists::assign_compact(std::vector<Index> counts, std::span<const Index> entries) {
+void NeighbourLists::assign_compact(std::span<const Index> counts, std::span<const Index> entries) {
     capacity = 0;
     std::vector<Index>().swap(indices);
-    count = std::move(counts);
-    const std::size_t n = count.size();
-    start.assign(n, 0);
+    std::vector<Index>().swap(count);
+    const std::size_t n = counts.size();
+    end.assign(n, 0);
     blocks.assign((n + kBlock - 1) / kBlock, {});
     std::size_t from = 0;
     for (std::size_t b = 0; b < blocks.size(); ++b) {
         std::size_t used = 0;
-        const std::size_t end = std::min(n, (b + 1) * kBlock);
-        for (std::size_t i = b * kBlock; i < end; ++i) used += count[i];
+        const std::size_t last = std::min(n, (b + 1) * kBlock);
+        for (std::size_t i = b * kBlock; i < last; ++i) used += counts[i];
         if (from + used > entries.size()) throw std::length_error("neighbour lists: fewer entries than the counts sum to");
         blocks[b].assign(entries.begin() + std::ptrdiff_t(from), entries.begin() + std::ptrdiff_t(from + used));
         blocks[b].resize(used + kSlack);
         used = 0;
-        for (std::size_t i = b * kBlock; i < end; ++i) start[i] = Index(used), used += count[i];
+        for (std::size_t i = b * kBlock; i < last; ++i) used += counts[i], end[i] = Index(used);
         from += used;
     }
     queried.clear();
     for (std::size_t i = 0; i < n; ++i)
-        if (count[i] > 0) queried.push_back(Index(i));
+        if (counts[i] > 0) queried.push_back(Index(i));
 }
 
 namespace {

@@ -38,12 +38,13 @@ public:
     static constexpr std::uint64_t kMaxCells = (std::uint64_t(1) << 32) - 2;
 
     /// @brief Sorts particle indices by cell (a counting sort, so ties keep index order and the
-    /// result is deterministic) and gathers their coordinates in that order, one array per axis
-    /// (what the vectorised filter loads). O(N + cells); the cell keys are parallel.
+    /// result is deterministic). O(N + cells); the cell keys are parallel. The grid keeps no copy
+    /// of the positions: a query reads them from the particle set it was built from, which must
+    /// not be reordered, shrunk or moved between the build and the query.
     void build(std::span<const Vec3> positions);
 
-    /// Slots past the last particle that the sorted arrays carry (copies of a far point), so a
-    /// vectorised loop may load a whole vector from any slot below particle_count().
+    /// Readable slots past the last particle in sorted_index() (particle 0), and far points past
+    /// the last candidate in a CandidateCache, so a vectorised loop may load a whole vector.
     static constexpr std::size_t kPadding = 16;
 
     Eigen::Vector3i cell_coords(const Vec3& x) const {
@@ -61,22 +62,23 @@ public:
     std::int64_t cell_of(const Vec3& x) const { return cell_index(cell_coords(x)); }
 
     /// @brief Calls fn(j, x_j) for every particle j in the 27 cells around x (a superset of
-    /// the particles within one cell size of x).
+    /// the particles within one cell size of x); `positions` are the particles the grid was
+    /// built from.
     template <class Fn>
-    void for_each_candidate(const Vec3& x, Fn&& fn) const {
+    void for_each_candidate(const Vec3& x, std::span<const Vec3> positions, Fn&& fn) const {
         const Eigen::Vector3i c = cell_coords(x);
         const int x0 = std::max(c[0] - 1, 0), x1 = std::min(c[0] + 1, m_dims[0] - 1);
         for (int z = std::max(c[2] - 1, 0); z <= std::min(c[2] + 1, m_dims[2] - 1); ++z)
             for (int y = std::max(c[1] - 1, 0); y <= std::min(c[1] + 1, m_dims[1] - 1); ++y) {
                 const std::int64_t row = cell_index({0, y, z});
                 const Index b = m_cell_start[row + x0], e = m_cell_start[row + x1 + 1];
-                for (Index k = b; k < e; ++k) fn(m_sorted_index[k], Vec3(m_sx[k], m_sy[k], m_sz[k]));
+                for (Index k = b; k < e; ++k) fn(m_sorted_index[k], positions[m_sorted_index[k]]);
             }
     }
 
     /// @brief Calls fn(begin, end) for the 9 contiguous ranges of sorted slots that hold the 27
     /// cells around x (the same candidates, in the same order, as for_each_candidate); the
-    /// slots index sorted_index() and sorted_x/y/z().
+    /// slots index sorted_index().
     template <class Fn>
     void for_each_candidate_range(const Vec3& x, Fn&& fn) const {
         const Eigen::Vector3i c = cell_coords(x);
@@ -102,10 +104,6 @@ public:
         return r;
     }
     std::span<const Index> sorted_index() const { return {m_sorted_index.data(), m_count}; }
-    /// Coordinates by sorted slot, one array per axis; kPadding readable slots follow the last.
-    const Real* sorted_x() const { return m_sx.data(); }
-    const Real* sorted_y() const { return m_sy.data(); }
-    const Real* sorted_z() const { return m_sz.data(); }
 
     const Eigen::Vector3i& dims() const { return m_dims; }
     Real cell_size() const { return m_cell; }
@@ -120,11 +118,10 @@ private:
     std::vector<Index> m_cell_start;      ///< first sorted slot of each cell; size cells + 1
     std::size_t m_count = 0;
     std::vector<Index> m_sorted_index;    ///< particle_count() + kPadding
-    std::vector<Real> m_sx, m_sy, m_sz;   ///< particle_count() + kPadding each
 };
 
-/// @brief The candidates of one cell's 27-cell neighbourhood copied out of the grid into
-/// contiguous arrays (one per axis and the particle index, in the grid's slot order), padded
+/// @brief The candidates of one cell's 27-cell neighbourhood gathered from the grid's particle
+/// set into contiguous arrays (one per axis and the particle index, in the grid's slot order), padded
 /// with far points to a whole vector. Queries in one cell (mostly consecutive in a z-ordered
 /// set) then filter one contiguous array instead of 9 ranges each, and a query whose
 /// neighbourhood is empty (most fluid particles against the boundary) costs one comparison.
@@ -133,8 +130,9 @@ struct CandidateCache {
     std::size_t count = 0;   ///< candidates; the arrays hold count + UniformGrid::kPadding
     std::vector<Real> x, y, z;
     std::vector<Index> index;
-    /// @brief Holds the neighbourhood of `cell`, the cell of `at`.
-    void fill(const UniformGrid& grid, const Vec3& at, std::int64_t cell);
+    /// @brief Holds the neighbourhood of `cell`, the cell of `at`; `positions` are the particles
+    /// the grid was built from.
+    void fill(const UniformGrid& grid, std::span<const Vec3> positions, const Vec3& at, std::int64_t cell);
 };
 
 /// @brief Neighbour lists of query particles, in one of two layouts:
@@ -143,25 +141,35 @@ struct CandidateCache {
 ///   (and every list is rebuilt) when a particle has more neighbours.
 /// * compact (capacity == 0): every list rebuilt at once (global, constant, PCISPH), stored
 ///   back to back in blocks of kBlock query particles, about 2.5x smaller than a slab; or the
-///   lists of a subset only (binned stepping), every other list empty.
+///   lists of a subset only (binned stepping), every other list empty. A list is known by its
+///   end in the block alone (it begins where the previous one of its block ends): 4 bytes per
+///   query particle.
 /// Either way a list may be read a whole vector (kSlack entries) past its end.
 struct NeighbourLists {
     static constexpr std::size_t kBlock = 256;  ///< query particles per compact block
     static constexpr std::size_t kSlack = 16;   ///< readable entries after every list
     Index capacity = 0;          ///< slab: entries per query particle (a multiple of 16); 0: compact
-    std::vector<Index> count;    ///< per query particle
+    std::vector<Index> count;    ///< slab: entries per query particle
     std::vector<Index> indices;  ///< slab: count.size() * capacity
-    std::vector<Index> start;    ///< compact: first entry of each list in its block
+    std::vector<Index> end;      ///< compact: one past the last entry of each list in its block
     std::vector<std::vector<Index>> blocks;  ///< compact: the lists of particles [kBlock b, kBlock (b + 1))
     /// Compact: the particles of the last subset build, ascending (the only non-empty lists);
-    /// empty after a build of every list. Lets the next subset build empty just those.
+    /// empty after a build of every list. Lets the next subset build empty just their blocks.
     std::vector<Index> queried;
 
     bool compact() const { return capacity == 0; }
+    /// Query particles the lists are for.
+    std::size_t rows() const { return compact() ? end.size() : count.size(); }
+    /// Compact: where list i begins in block i / kBlock.
+    Index begin_of(Index i) const { return i % kBlock ? end[i - 1] : Index(0); }
+    Index size_of(Index i) const { return compact() ? end[i] - begin_of(i) : count[i]; }
     std::span<const Index> of(Index i) const {
-        const Index* base = capacity ? indices.data() + std::size_t(i) * capacity : blocks[i / kBlock].data() + start[i];
-        return {base, count[i]};
+        if (capacity) return {indices.data() + std::size_t(i) * capacity, count[i]};
+        const Index b = begin_of(i);
+        return {blocks[i / kBlock].data() + b, end[i] - b};
     }
+    /// Every list's length, in query order (the checkpoint form).
+    std::vector<Index> counts() const;
     std::size_t bytes() const;
     std::size_t total() const;
     /// @brief Follows a permutation of the query particles (new[i] = old[perm[i]]); when
@@ -170,9 +178,9 @@ struct NeighbourLists {
     void permute(std::span<const Index> perm, bool remap_entries);
     /// @brief Every list, one after another in query order (the checkpoint form).
     std::vector<Index> concatenated() const;
-    /// @brief The compact layout from counts and concatenated lists (as concatenated() gives);
-    /// `queried` becomes the particles with a non-empty list.
-    void assign_compact(std::vector<Index> counts, std::span<const Index> entries);
+    /// @brief The compact layout from counts and concatenated lists (as counts() and
+    /// concatenated() give); `queried` becomes the particles with a non-empty list.
+    void assign_compact(std::span<const Index> counts, std::span<const Index> entries);
 };
 
 /// @brief Indices i in [0, n) with pred(i), ascending; parallel and deterministic.
@@ -189,14 +197,15 @@ struct QuerySubset {
     bool keep_others = true;
 };
 
-/// @brief Builds the lists of the query particles against the particles of `grid`: every j
-/// with |x_i - x_j|^2 < radius^2, in the grid's sorted order, excluding j == i when
-/// `exclude_self` (query and grid are the same set). Equals brute force exactly. `simd` takes
+/// @brief Builds the lists of the query particles against the particles of `grid` (at
+/// `grid_positions`, the set it was built from): every j with |x_i - x_j|^2 < radius^2, in the
+/// grid's sorted order, excluding j == i when `exclude_self` (query and grid are the same set).
+/// Equals brute force exactly. `simd` takes
 /// the vectorised filter (neighbour_filter.hpp; float builds), else the scalar one: the same
 /// lists either way. Every list (subset.all) gives the compact layout, a subset the slab one.
-void build_neighbour_lists(const UniformGrid& grid, std::span<const Vec3> query_positions,
-                           Real radius, bool exclude_self, const QuerySubset& subset,
-                           NeighbourLists& lists, bool simd);
+void build_neighbour_lists(const UniformGrid& grid, std::span<const Vec3> grid_positions,
+                           std::span<const Vec3> query_positions, Real radius, bool exclude_self,
+                           const QuerySubset& subset, NeighbourLists& lists, bool simd);
 
 /// @brief Permutation that orders particles along the z-order (Morton) curve of their grid
 /// cells, ties broken by current index: new[i] = old[perm[i]].

@@ -116,9 +116,10 @@ FluidSample sample_fluid(const Scene& scene, double r) {
 
 /// Boundary particles, sampled once at the fluid spacing r0 = 2 r = h / 2: the static
 /// boundaries first, then each moving boundary as one contiguous range (a moving body).
-/// Returns the sampled positions (double precision).
+/// Returns the sampled positions (double precision). The normals are not kept: only the
+/// methods that read them register the column (ensure_boundary_normals).
 std::vector<Vec3d> sample_boundaries(World& w, const Scene& scene, double r) {
-    std::vector<Vec3d> bx, bn;
+    std::vector<Vec3d> bx;
     w.moving_bodies.clear();
     for (const bool moving : {false, true}) {
         for (std::size_t j = 0; j < scene.boundaries.size(); ++j) {
@@ -127,14 +128,12 @@ std::vector<Vec3d> sample_boundaries(World& w, const Scene& scene, double r) {
             auto s = sample_boundary(b, 2 * r, r);
             const std::size_t begin = bx.size();
             bx.insert(bx.end(), s.positions.begin(), s.positions.end());
-            bn.insert(bn.end(), s.normals.begin(), s.normals.end());
             if (moving) w.moving_bodies.push_back(MovingBody{begin, bx.size(), j, Aabb{}, 0.0});
         }
         if (!moving) w.static_boundary_end = bx.size();
     }
     auto& bs = w.boundary.store;
     bs.add(comp::position);
-    bs.add(comp::normal);
     // Only scenes with a moving boundary get its columns (static scenes are unchanged).
     if (!w.moving_bodies.empty()) {
         bs.add(comp::rest_position);
@@ -143,11 +142,7 @@ std::vector<Vec3d> sample_boundaries(World& w, const Scene& scene, double r) {
     bs.resize(bx.size());
     {
         auto x = bs.get(comp::position);
-        auto n = bs.get(comp::normal);
-        for (std::size_t i = 0; i < bx.size(); ++i) {
-            x[i] = bx[i].cast<Real>();
-            n[i] = bn[i].cast<Real>();
-        }
+        for (std::size_t i = 0; i < bx.size(); ++i) x[i] = bx[i].cast<Real>();
     }
     if (!w.moving_bodies.empty()) {
         // x0 is the sampled position; at t = 0 a body is at x0 + d(0) with velocity v(0)
@@ -274,6 +269,15 @@ void write_fluid(World& w, const FluidSample& fluid) {
 
 }
 
+/// The boundary store's row order: the static particles (the first static_boundary_end of
+/// `sampled`, in sampling order) in z-order of the boundary grid's cells, the moving bodies'
+/// ranges as sampled. new[i] = sampled[perm[i]]; deterministic, so it can be recomputed.
+std::vector<Index> boundary_order(const World& w, std::span<const Vec3> sampled) {
+    std::vector<Index> perm = zorder_permutation(w.boundary_grid, sampled.subspan(0, w.static_boundary_end));
+    for (std::size_t i = w.static_boundary_end; i < sampled.size(); ++i) perm.push_back(Index(i));
+    return perm;
+}
+
 /// The grids: the fluid's over the domain, the boundary's over the domain and every boundary
 /// particle; static boundary particles are put in z-order once.
 void build_grids(World& w, const std::vector<Vec3d>& bx) {
@@ -294,10 +298,7 @@ void build_grids(World& w, const std::vector<Vec3d>& bx) {
         // Static boundary particles never move: store them in z-order once, then index the
         // grid. Moving bodies keep their ranges (the permutation is the identity there); the
         // boundary motion system rebuilds the grid every step.
-        const std::span<const Vec3> all = bs.get(comp::position);
-        std::vector<Index> perm = zorder_permutation(w.boundary_grid, all.subspan(0, w.static_boundary_end));
-        for (std::size_t i = w.static_boundary_end; i < all.size(); ++i) perm.push_back(Index(i));
-        bs.permute(perm);
+        bs.permute(boundary_order(w, bs.get(comp::position)));
         w.boundary_grid.build(bs.get(comp::position));
     }
 }
@@ -316,6 +317,44 @@ void initialise_world(World& w, const Scene& scene) {
     w.clock = Clock{};
     w.step_size = StepSize{};
     w.step_size.set(scene.simulation.stepping.dt);
+}
+
+std::vector<Vec3> sampled_boundary_normals(const World& w, std::size_t begin, std::size_t end) {
+    const Scene& scene = w.scene;
+    const double r = scene.particle_radius();
+    end = std::min(end, w.boundary.size());
+    begin = std::min(begin, end);
+    std::vector<Vec3> out(end - begin, Vec3::Zero());
+    if (begin < w.static_boundary_end) {  // the static part: sampled again and put in store order
+        std::vector<Vec3> x, n;
+        for (const auto& b : scene.boundaries) {
+            if (b.motion) continue;
+            const auto s = sample_boundary(b, 2 * r, r);
+            for (std::size_t k = 0; k < s.positions.size(); ++k) {
+                x.push_back(s.positions[k].cast<Real>());
+                n.push_back(s.normals[k].cast<Real>());
+            }
+        }
+        if (x.size() != w.static_boundary_end)
+            throw std::logic_error("sampled_boundary_normals: the scene samples to another boundary");
+        const std::vector<Index> perm = boundary_order(w, x);
+        for (std::size_t i = begin; i < std::min(end, w.static_boundary_end); ++i) out[i - begin] = n[perm[i]];
+    }
+    for (const MovingBody& body : w.moving_bodies) {  // each body's range as sampled
+        if (body.end <= begin || body.begin >= end) continue;
+        const auto s = sample_boundary(scene.boundaries[body.boundary], 2 * r, r);
+        for (std::size_t i = std::max(begin, body.begin); i < std::min(end, body.end); ++i)
+            out[i - begin] = s.normals[i - body.begin].cast<Real>();
+    }
+    return out;
+}
+
+void ensure_boundary_normals(World& w) {
+    auto& bs = w.boundary.store;
+    if (bs.has(comp::normal.name)) return;
+    const std::vector<Vec3> n = sampled_boundary_normals(w, 0, w.boundary.size());
+    bs.add(comp::normal);
+    std::copy(n.begin(), n.end(), bs.get(comp::normal).begin());
 }
 
 }  // namespace sph

@@ -5,6 +5,7 @@
 #include <iterator>
 #include <type_traits>
 
+#include "engine/data/components.hpp"
 #include "engine/run/io.hpp"
 #include "engine/run/simulation.hpp"
 
@@ -66,10 +67,11 @@ std::string lists_section(const NeighbourLists& l) {
     std::string s;
     const std::vector<Index> compact = l.compact() ? l.concatenated() : std::vector<Index>{};
     const std::vector<Index>& entries = l.compact() ? compact : l.indices;
+    const std::vector<Index> counts = l.counts();
     put(s, std::uint64_t(l.capacity));
-    put(s, std::uint64_t(l.count.size()));
+    put(s, std::uint64_t(counts.size()));
     put(s, std::uint64_t(entries.size()));
-    s += raw_vector(l.count);
+    s += raw_vector(counts);
     s += raw_vector(entries);
     return s;
 }
@@ -88,9 +90,10 @@ void restore_lists(NeighbourLists& l, const std::string& data, const std::string
     if (sum != ni)
         throw CheckpointError(file.string() + ": section '" + what + "' holds " + std::to_string(ni) +
                               " neighbour entries, but its counts sum to " + std::to_string(sum));
-    std::vector<Index> entries;
+    std::vector<Index> entries, counts;
     entries.swap(l.indices);
-    l.assign_compact(std::move(l.count), entries);
+    counts.swap(l.count);
+    l.assign_compact(counts, entries);
 }
 
 std::string column_section(const ComponentStore& store, const std::string& name) {
@@ -106,6 +109,10 @@ void restore_store(ComponentStore& store, const std::string& set, const Checkpoi
     std::vector<std::string> saved;
     for (const auto& [name, data] : ck.sections)
         if (name.rfind(prefix, 0) == 0) saved.push_back(name.substr(prefix.size()));
+    // Checkpoints written before the boundary's normals became a column of the methods that read
+    // them carry `boundary/normal` for every method; the scene gives the normals again.
+    if (set == "boundary" && !store.has(comp::normal.name))
+        std::erase(saved, std::string(comp::normal.name));
     if (saved != store.names()) {
         std::string a, b;
         for (const auto& n : saved) a += (a.empty() ? "" : ", ") + n;

@@ -1,5 +1,7 @@
 #include "engine/run/io.hpp"
 
+#include "engine/data/world_init.hpp"
+
 #include <fcntl.h>
 #include <sys/resource.h>
 #include <unistd.h>
@@ -16,6 +18,7 @@
 #include <type_traits>
 
 #include "engine/data/components.hpp"
+#include "engine/data/world_init.hpp"
 #include "engine/core/errors.hpp"
 #include "engine/data/world.hpp"
 
@@ -443,7 +446,11 @@ void write_boundary(const std::filesystem::path& stem, const World& world, std::
     const auto rows = [&](std::span<const Vec3> v) { return v.subspan(begin, end - begin); };
     std::vector<FrameArray> arrays;
     arrays.push_back(vec3_array("position", rows(store.get(comp::position))));
-    if (store.has(comp::normal.name)) arrays.push_back(vec3_array("normal", rows(store.get(comp::normal))));
+    // Methods that read normals keep them in the store; for the others they are sampled again.
+    if (store.has(comp::normal.name))
+        arrays.push_back(vec3_array("normal", rows(store.get(comp::normal))));
+    else
+        arrays.push_back(vec3_array("normal", sampled_boundary_normals(world, begin, end)));
     if (store.has(comp::velocity.name)) arrays.push_back(vec3_array("velocity", rows(store.get(comp::velocity))));
     std::vector<std::uint32_t> index(end - begin);
     for (std::size_t i = 0; i < index.size(); ++i) index[i] = std::uint32_t(begin + i);

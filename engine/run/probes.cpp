@@ -39,7 +39,7 @@ double colour_at(const World& w, const UniformGrid& grid, const Vec3d& x) {
     const auto rho = w.fluid.store.get(comp::density);
     const Vec3 xf = x.cast<Real>();
     double c = 0;
-    grid.for_each_candidate(xf, [&](Index j, const Vec3& xj) { c += volume(w, rho[j]) * double(w.kernel.w((xf - xj).norm())); });
+    grid.for_each_candidate(xf, w.fluid.store.get(comp::position), [&](Index j, const Vec3& xj) { c += volume(w, rho[j]) * double(w.kernel.w((xf - xj).norm())); });
     return c;
 }
 
@@ -48,7 +48,7 @@ double fluid_pressure_at(const World& w, const UniformGrid& grid, const Vec3d& x
     const auto p = w.fluid.store.get(comp::pressure);
     const Vec3 xf = x.cast<Real>();
     double num = 0, den = 0;
-    grid.for_each_candidate(xf, [&](Index j, const Vec3& xj) {
+    grid.for_each_candidate(xf, w.fluid.store.get(comp::position), [&](Index j, const Vec3& xj) {
         const double vw = volume(w, rho[j]) * double(w.kernel.w((xf - xj).norm()));
         num += vw * double(p[j]);
         den += vw;
@@ -69,7 +69,7 @@ double boundary_pressure_at(const World& w, const UniformGrid& grid, const Vec3d
         if ((x - point).norm() > radius) continue;
         double pw = 0, ww = 0;
         Vec3d rw = Vec3d::Zero();
-        grid.for_each_candidate(xb[b], [&](Index f, const Vec3& xf) {
+        grid.for_each_candidate(xb[b], w.fluid.store.get(comp::position), [&](Index f, const Vec3& xf) {
             const double wbf = w.kernel.w((xb[b] - xf).norm());
             pw += double(p[f]) * wbf;
             rw += double(rho[f] > Real(0) ? rho[f] : w.physics.rest_density) * (x - xf.cast<double>()) * wbf;
@@ -105,7 +105,7 @@ double sensor_pressure_at(const World& w, const UniformGrid& grid, const Vec3d& 
             const Vec3 xf = x.cast<Real>();
             double pw = 0, ww = 0, colour = 0;
             Vec3d rw = Vec3d::Zero();
-            grid.for_each_candidate(xf, [&](Index f, const Vec3& xj) {
+            grid.for_each_candidate(xf, w.fluid.store.get(comp::position), [&](Index f, const Vec3& xj) {
                 const double wf = w.kernel.w((xf - xj).norm());
                 pw += double(p[f]) * wf;
                 rw += double(rho[f] > Real(0) ? rho[f] : w.physics.rest_density) * (x - xj.cast<double>()) * wf;
@@ -181,7 +181,7 @@ double front_by_neighbours(const World& w, const UniformGrid& grid, const Vec3d&
     const Real h2 = w.physics.h * w.physics.h;
     for (const Index i : order) {
         int count = 0;
-        grid.for_each_candidate(x[i], [&](Index j, const Vec3& xj) {
+        grid.for_each_candidate(x[i], w.fluid.store.get(comp::position), [&](Index j, const Vec3& xj) {
             if (j != i && (x[i] - xj).squaredNorm() < h2) ++count;
         });
         if (count >= k) return double(proj[i]);
@@ -240,7 +240,7 @@ InteriorDensityError interior_density_error(const World& w) {
                 // The world's boundary grid (kept current by the boundary motion system).
                 bool near_wall = false;
                 if (walls)
-                    w.boundary_grid.for_each_candidate(x[i], [&](Index, const Vec3& xbj) {
+                    w.boundary_grid.for_each_candidate(x[i], w.boundary.store.get(comp::position), [&](Index, const Vec3& xbj) {
                         near_wall = near_wall || (x[i] - xbj).squaredNorm() < h2;
                     });
                 if (near_wall) continue;

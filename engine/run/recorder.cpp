@@ -30,7 +30,7 @@ double front_x(const World& w) {
     const auto x = w.fluid.store.get(comp::position);
     double front = -std::numeric_limits<double>::infinity();
     for (std::size_t i = 0; i < x.size(); ++i)
-        if (i < w.fluid_neighbours.count.size() && w.fluid_neighbours.count[i] >= 4)
+        if (i < w.fluid_neighbours.rows() && w.fluid_neighbours.size_of(Index(i)) >= 4)
             front = std::max(front, double(x[i].x()));
     return std::isfinite(front) ? front : 0.0;
 }

@@ -54,7 +54,7 @@ void HaloSystem::run(Context& ctx) {
                 if (claim.load(std::memory_order_relaxed) != 0) continue;
                 if (claim.exchange(1, std::memory_order_relaxed) == 0) out.push_back(j);
             }
-            if (m_with_boundary) bcount += boundary_nb->count[i];
+            if (m_with_boundary) bcount += boundary_nb->size_of(Index(i));
         }
     });
     halo.clear();

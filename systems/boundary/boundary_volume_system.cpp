@@ -55,7 +55,7 @@ void BoundaryVolumeSystem::run(Context& ctx) {
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 1024), [&](const auto& r) {
         for (std::size_t b = r.begin(); b < r.end(); ++b) {
             Real sum = 0;
-            grid.for_each_candidate(x[b], [&](Index k, const Vec3& xk) {
+            grid.for_each_candidate(x[b], x, [&](Index k, const Vec3& xk) {
                 if (!group.empty() && group[k] != group[b]) return;
                 const Real d2 = (x[b] - xk).squaredNorm();
                 if (d2 < h2) sum += kernel.w(std::sqrt(d2));

@@ -42,10 +42,10 @@ void KernelSums(const KernelSumArgs& a, const Index* rows, std::size_t begin, st
         const Index i = rows ? rows[q] : Index(q);
         prefetch_ahead(*a.fluid, a.x, rows, sparse, q, end);
         const Broadcast3<decltype(d)> xi = broadcast3(d, a.x + 3 * std::size_t(i));
-        fluid_sum[q - begin] = kernel_sum(d, k, a.x, xi, a.fluid->of(i).data(), a.fluid->count[i], nullptr);
+        fluid_sum[q - begin] = kernel_sum(d, k, a.x, xi, a.fluid->of(i).data(), a.fluid->size_of(Index(i)), nullptr);
         if (a.xb)
             boundary_sum[q - begin] =
-                kernel_sum(d, k, a.xb, xi, a.boundary->of(i).data(), a.boundary->count[i], a.weight_b);
+                kernel_sum(d, k, a.xb, xi, a.boundary->of(i).data(), a.boundary->size_of(Index(i)), a.weight_b);
     }
 }
 // He eq. 5 plus the delta-SPH term of density_kernels.hpp:
@@ -67,7 +67,7 @@ void ContinuityRates(const ContinuityRateArgs& a, const Index* rows, std::size_t
         const auto rhoi = hn::Set(d, a.rho[i]);
         auto div = hn::Zero(d), diffused = hn::Zero(d);
         const Index* list = a.fluid->of(i).data();
-        const std::size_t count = a.fluid->count[i];
+        const std::size_t count = a.fluid->size_of(Index(i));
         for (std::size_t k0 = 0; k0 < count; k0 += hn::Lanes(d)) {
             const PairChunk<D> c = pair_chunk(d, a.x, xi, list, k0, count);
             const auto s = hn::IfThenElseZero(c.in, k.grad_factor(d, hn::Sqrt(c.r2)));  // grad W = x_ij s
@@ -86,7 +86,7 @@ void ContinuityRates(const ContinuityRateArgs& a, const Index* rows, std::size_t
         if (a.xb) {
             auto bdiv = hn::Zero(d);
             const Index* blist = a.boundary->of(i).data();
-            const std::size_t bcount = a.boundary->count[i];
+            const std::size_t bcount = a.boundary->size_of(Index(i));
             for (std::size_t k0 = 0; k0 < bcount; k0 += hn::Lanes(d)) {
                 const PairChunk<D> c = pair_chunk(d, a.xb, xi, blist, k0, bcount);
                 const auto s = hn::IfThenElseZero(c.in, k.grad_factor(d, hn::Sqrt(c.r2)));

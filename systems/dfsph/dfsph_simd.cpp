@@ -35,7 +35,7 @@ struct RowGradients {
 template <class G>
 HWY_INLINE auto row_gradients(const NeighbourLists& lists, G& grads, std::size_t i) {
     const std::size_t b = i / NeighbourLists::kBlock, n = lists.blocks[b].size();
-    auto* base = grads.blocks[b].data() + lists.start[i];
+    auto* base = grads.blocks[b].data() + lists.begin_of(Index(i));
     return RowGradients<std::remove_reference_t<decltype(*base)>>{base, base + n, base + 2 * n};
 }
 
@@ -74,7 +74,7 @@ void FactorSums(const DfsphPairArgs& a, std::size_t begin, std::size_t end, Real
             visc.z = hn::NegMulAdd(coef, c.dz, visc.z);
         };
         const Index* list = a.fluid->of(Index(i)).data();
-        const std::size_t count = a.fluid->count[i];
+        const std::size_t count = a.fluid->size_of(Index(i));
         const auto out = row_gradients(*a.fluid, grads, i);
         for (std::size_t k0 = 0; k0 < count; k0 += hn::Lanes(d)) {
             const PairChunk<D> c = pair_chunk(d, a.x, xi, list, k0, count);
@@ -98,7 +98,7 @@ void FactorSums(const DfsphPairArgs& a, std::size_t begin, std::size_t end, Real
         }
         if (a.xb) {
             const Index* blist = a.boundary->of(Index(i)).data();
-            const std::size_t bcount = a.boundary->count[i];
+            const std::size_t bcount = a.boundary->size_of(Index(i));
             for (std::size_t k0 = 0; k0 < bcount; k0 += hn::Lanes(d)) {
                 const PairChunk<D> c = pair_chunk(d, a.xb, xi, blist, k0, bcount);
                 const auto r = hn::Sqrt(c.r2);
@@ -146,7 +146,7 @@ void Divergence(const DfsphPairArgs& a, std::size_t begin, std::size_t end, Real
         const Broadcast3<D> vi = broadcast3(d, a.v + 3 * i);
         auto sum = hn::Zero(d);
         const Index* list = a.fluid->of(Index(i)).data();
-        const std::size_t count = a.fluid->count[i];
+        const std::size_t count = a.fluid->size_of(Index(i));
         const auto g = row_gradients(*a.fluid, *a.grads, i);
         for (std::size_t k0 = 0; k0 < count; k0 += hn::Lanes(d)) {
             hn::Mask<decltype(di)> in_i;
@@ -170,7 +170,7 @@ void Pressure(const DfsphPairArgs& a, const Real* kappa, std::size_t begin, std:
         const auto ki = hn::Set(d, kappa[i]);
         Broadcast3<D> f{hn::Zero(d), hn::Zero(d), hn::Zero(d)};
         const Index* list = a.fluid->of(Index(i)).data();
-        const std::size_t count = a.fluid->count[i];
+        const std::size_t count = a.fluid->size_of(Index(i));
         const auto g = row_gradients(*a.fluid, *a.grads, i);
         for (std::size_t k0 = 0; k0 < count; k0 += hn::Lanes(d)) {
             hn::Mask<decltype(di)> in_i;

@@ -15,6 +15,7 @@
 
 #include "engine/data/components.hpp"
 #include "engine/data/world.hpp"
+#include "engine/data/world_init.hpp"
 #include "engine/graph/context.hpp"
 #include "systems/dfsph/dfsph_simd.hpp"
 #include "systems/forces/forces_kernels.hpp"
@@ -397,7 +398,7 @@ void DfsphSourceSystem::run(Context& ctx) {
                 if (density) {
                     src = rho[i] * inv_rho0 + dt_r * div - Real(1);  // eq. 12
                 } else {
-                    const std::size_t nb = p.fluid_nb->count[i] + (boundary_nb ? boundary_nb->count[i] : 0);
+                    const std::size_t nb = p.fluid_nb->size_of(Index(i)) + (boundary_nb ? boundary_nb->size_of(Index(i)) : 0);
                     src = nb >= min_nb ? div * dt_r : Real(0);  // eq. 16, times dt
                 }
                 const Real err = std::max(Real(0), src);  // what the solver's average error counts
@@ -452,6 +453,8 @@ void DfsphPredictSystem::run(Context& ctx) {
         }
     });
 }
+
+void DfsphWallContactSystem::register_components(World& w) { ensure_boundary_normals(w); }
 
 Access DfsphWallContactSystem::access() const {
     return Access()

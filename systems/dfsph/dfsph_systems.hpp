@@ -142,6 +142,7 @@ public:
     explicit DfsphWallContactSystem(bool moving) : m_moving(moving) {}
     std::string name() const override { return "dfsph_wall_contact"; }
     Access access() const override;
+    void register_components(World& w) override;  ///< the boundary's normals
     void run(Context& ctx) override;
 
 private:

@@ -86,7 +86,7 @@ void EmitterSystem::run(Context& ctx) {
             for (const Vec3& q : add)
                 if ((p - q).squaredNorm() < min_d2) clear = false;
             if (clear && xb.size() > 0)
-                boundary_grid.for_each_candidate(p, [&](Index, const Vec3& q) {
+                boundary_grid.for_each_candidate(p, xb, [&](Index, const Vec3& q) {
                     if ((p - q).squaredNorm() < min_d2) clear = false;
                 });
             if (!clear) continue;

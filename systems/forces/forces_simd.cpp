@@ -77,7 +77,7 @@ void ForceRows(const ForcePairArgs& a, const Index* rows, std::size_t begin, std
         Broadcast3<D> acc{hn::Zero(d), hn::Zero(d), hn::Zero(d)};
         auto div = hn::Zero(d);
         const Index* list = a.fluid->of(i).data();
-        const std::size_t count = a.fluid->count[i];
+        const std::size_t count = a.fluid->size_of(Index(i));
         for (std::size_t k0 = 0; k0 < count; k0 += hn::Lanes(d)) {
             const PairChunk<D> c = pair_chunk(d, a.x, xi, list, k0, count);
             const auto s = hn::IfThenElseZero(c.in, k.grad_factor(d, hn::Sqrt(c.r2)));
@@ -99,7 +99,7 @@ void ForceRows(const ForcePairArgs& a, const Index* rows, std::size_t begin, std
         }
         if (a.xb) {
             const Index* blist = a.boundary->of(i).data();
-            const std::size_t bcount = a.boundary->count[i];
+            const std::size_t bcount = a.boundary->size_of(Index(i));
             const auto two_pi = hn::Set(d, Real(2) * pi_s);
             for (std::size_t k0 = 0; k0 < bcount; k0 += hn::Lanes(d)) {
                 const PairChunk<D> c = pair_chunk(d, a.xb, xi, blist, k0, bcount);
@@ -140,7 +140,7 @@ void PressureForceRows(const PressurePairArgs& a, std::size_t begin, std::size_t
         // term(j): p_j / rho_j^2 of the chunk's neighbours; weight(j): m_j.
         auto pairs = [&](const Real* xs, const NeighbourLists& lists, auto&& term, auto&& weight) {
             const Index* list = lists.of(Index(i)).data();
-            const std::size_t count = lists.count[i];
+            const std::size_t count = lists.size_of(Index(i));
             for (std::size_t k0 = 0; k0 < count; k0 += hn::Lanes(d)) {
                 const PairChunk<D> c = pair_chunk(d, xs, xi, list, k0, count);
                 const auto s = hn::IfThenElseZero(c.in, k.grad_factor(d, hn::Sqrt(c.r2)));
@@ -178,7 +178,7 @@ void NonpressureRows(const NonpressurePairArgs& a, std::size_t begin, std::size_
         const Broadcast3<D> vi = broadcast3(d, a.v + 3 * i);
         Broadcast3<D> acc{hn::Zero(d), hn::Zero(d), hn::Zero(d)};
         const Index* list = a.fluid->of(Index(i)).data();
-        const std::size_t count = a.fluid->count[i];
+        const std::size_t count = a.fluid->size_of(Index(i));
         for (std::size_t k0 = 0; k0 < count; k0 += hn::Lanes(d)) {
             const PairChunk<D> c = pair_chunk(d, a.x, xi, list, k0, count);
             const auto r = hn::Sqrt(c.r2);
@@ -193,7 +193,7 @@ void NonpressureRows(const NonpressurePairArgs& a, std::size_t begin, std::size_
         }
         if (a.xb && viscous) {
             const Index* blist = a.boundary->of(Index(i)).data();
-            const std::size_t bcount = a.boundary->count[i];
+            const std::size_t bcount = a.boundary->size_of(Index(i));
             for (std::size_t k0 = 0; k0 < bcount; k0 += hn::Lanes(d)) {
                 const PairChunk<D> c = pair_chunk(d, a.xb, xi, blist, k0, bcount);
                 const Broadcast3<D> vib = relative_velocity(d, vi, a.vel_b, c);  // v_i - v_b

@@ -30,7 +30,7 @@ void StepStatsSystem::run(Context& ctx) {
     const auto v = ctx.read(fluid(comp::velocity));
     const auto a = ctx.read(fluid(comp::acceleration));
     const double rho0 = ctx.physics().rest_density;
-    const auto& counts = ctx.read(res::fluid_neighbours).count;
+    const NeighbourLists& lists = ctx.read(res::fluid_neighbours);
     // Individual stepping: neighbour pairs and the updated count are those of the active set.
     const std::uint8_t* is_active = m_individual ? ctx.read(fluid(comp::active)).data() : nullptr;
     const std::vector<Index>* rows = m_rows == Rows::Active ? &ctx.read(res::active_set) : nullptr;
@@ -50,7 +50,7 @@ void StepStatsSystem::run(Context& ctx) {
                     acc.a2_max = a2;
                     acc.a_arg = Index(i);
                 }
-                if (i < counts.size() && (!is_active || is_active[i])) acc.pairs += counts[i];
+                if (i < lists.rows() && (!is_active || is_active[i])) acc.pairs += lists.size_of(Index(i));
             }
             return acc;
         },

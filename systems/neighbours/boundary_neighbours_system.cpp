@@ -16,12 +16,13 @@ QuerySubset subset_of(const Context& ctx, bool individual, bool keep_others) {
 
 Access BoundaryNeighbourSystem::access() const {
     return Access()
-        .read(fluid(comp::position), res::boundary_grid)
+        .read(fluid(comp::position), boundary(comp::position), res::boundary_grid)
         .write(res::boundary_neighbours)
         .read_if(m_individual, res::active_set);
 }
 void BoundaryNeighbourSystem::run(Context& ctx) {
-    build_neighbour_lists(ctx.read(res::boundary_grid), ctx.read(fluid(comp::position)), ctx.physics().h, false,
+    build_neighbour_lists(ctx.read(res::boundary_grid), ctx.read(boundary(comp::position)), ctx.read(fluid(comp::position)),
+                          ctx.physics().h, false,
                           subset_of(ctx, m_individual, m_keep_others), ctx.write(res::boundary_neighbours), ctx.physics().simd);
 }
 

@@ -23,8 +23,9 @@ Access FluidNeighbourSystem::access() const {
 // He Alg. 2 lines 3-4: fresh lists for the active particles only; the others keep theirs.
 void FluidNeighbourSystem::run(Context& ctx) {
     const QuerySubset subset = subset_of(ctx, m_individual, m_keep_others);
-    build_neighbour_lists(ctx.read(res::fluid_grid), ctx.read(fluid(comp::position)), ctx.physics().h, true, subset,
-                          ctx.write(res::fluid_neighbours), ctx.physics().simd);
+    const auto x = ctx.read(fluid(comp::position));
+    build_neighbour_lists(ctx.read(res::fluid_grid), x, x, ctx.physics().h, true, subset, ctx.write(res::fluid_neighbours),
+                          ctx.physics().simd);
     ctx.write(counter::neighbour_searches) = subset.all ? ctx.size(SetId::Fluid) : subset.indices.size();
 }
 

@@ -3,11 +3,14 @@
 
 #include "engine/data/components.hpp"
 #include "engine/data/world.hpp"
+#include "engine/data/world_init.hpp"
 #include "engine/graph/context.hpp"
 #include "systems/pcisph/direct_forcing.hpp"
 #include "systems/pcisph/pcisph_components.hpp"
 
 namespace sph {
+
+void PredictCollisionSystem::register_components(World& w) { ensure_boundary_normals(w); }
 
 Access PredictCollisionSystem::access() const {
     return Access()

@@ -15,6 +15,7 @@ public:
     WorldCollisionSystem(bool moving, double friction = 1.0) : m_moving(moving), m_friction(friction) {}
     std::string name() const override { return "world_collision"; }
     Access access() const override;
+    void register_components(World& w) override;  ///< the boundary's normals
     void run(Context& ctx) override;
 
 private:

@@ -127,7 +127,7 @@ void check_fraction(double fraction, bool simd) {
         if (want[i]) {
             EXPECT_EQ(sorted(w.fluid_neighbours.of(i)), brute_neighbours(x, x, i, h, true)) << "particle " << i;
             EXPECT_EQ(sorted(w.boundary_neighbours.of(i)), brute_neighbours(x, xb, i, h, false)) << "particle " << i;
-            boundary_entries += w.boundary_neighbours.count[i];
+            boundary_entries += w.boundary_neighbours.size_of(Index(i));
         } else {
             EXPECT_TRUE(std::ranges::equal(w.fluid_neighbours.of(i), fl_before.of(i))) << "particle " << i;
             EXPECT_TRUE(std::ranges::equal(w.boundary_neighbours.of(i), bl_before.of(i))) << "particle " << i;

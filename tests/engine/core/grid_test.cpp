@@ -57,7 +57,7 @@ TEST(NeighbourSearch, EqualsBruteForceOnRandomCloud) {
         UniformGrid grid(Aabb{Vec3d(-1, -1, -1), Vec3d(0.5, 0.5, 0.5)}, h);
         grid.build(pts);
         NeighbourLists lists;
-        build_neighbour_lists(grid, pts, h, true, QuerySubset{}, lists, simd);
+        build_neighbour_lists(grid, pts, pts, h, true, QuerySubset{}, lists, simd);
         std::vector<Index> all(pts.size());
         for (Index i = 0; i < all.size(); ++i) all[i] = i;
         expect_equal_to_brute(grid, pts, pts, h, true, lists, all);
@@ -74,7 +74,7 @@ TEST(NeighbourSearch, CrossSetQueriesIncludeEveryMatch) {
         UniformGrid grid(Aabb{Vec3d(-1, -1, -1), Vec3d(0.5, 0.5, 0.5)}, h);
         grid.build(pts);
         NeighbourLists lists;
-        build_neighbour_lists(grid, q, h, false, QuerySubset{}, lists, simd);
+        build_neighbour_lists(grid, pts, q, h, false, QuerySubset{}, lists, simd);
         for (Index i = 0; i < q.size(); ++i) {
             auto got = std::vector<Index>(lists.of(i).begin(), lists.of(i).end());
             std::sort(got.begin(), got.end());
@@ -97,7 +97,7 @@ TEST(NeighbourSearch, SubsetRebuildAndCapacityGrowth) {
         UniformGrid grid(Aabb{Vec3d(-1, -1, -1), Vec3d(0.5, 0.5, 0.5)}, h);
         grid.build(pts);
         NeighbourLists lists;
-        build_neighbour_lists(grid, pts, h, true, QuerySubset{}, lists, simd);
+        build_neighbour_lists(grid, pts, pts, h, true, QuerySubset{}, lists, simd);
         // Move a few particles into one dense clump, then rebuild only them.
         std::vector<Index> moved;
         for (Index i = 0; i < 120; ++i) {
@@ -106,7 +106,7 @@ TEST(NeighbourSearch, SubsetRebuildAndCapacityGrowth) {
         }
         grid.build(pts);
         const Index cap_before = lists.capacity;
-        build_neighbour_lists(grid, pts, h, true, QuerySubset{moved, false}, lists, simd);
+        build_neighbour_lists(grid, pts, pts, h, true, QuerySubset{moved, false}, lists, simd);
         EXPECT_GT(lists.capacity, cap_before);
         expect_equal_to_brute(grid, pts, pts, h, true, lists, moved);
         // After growth every list was rebuilt, so all match brute force for the new positions.
@@ -131,8 +131,8 @@ TEST(NeighbourSearch, VectorisedFilterEqualsScalarInOrder) {
     for (const auto& [self, subset] : {std::pair{true, QuerySubset{}}, std::pair{false, QuerySubset{}},
                                        std::pair{true, QuerySubset{all, false}}}) {
         NeighbourLists scalar, vectorised;
-        build_neighbour_lists(grid, pts, h, self, subset, scalar, false);
-        build_neighbour_lists(grid, pts, h, self, subset, vectorised, true);
+        build_neighbour_lists(grid, pts, pts, h, self, subset, scalar, false);
+        build_neighbour_lists(grid, pts, pts, h, self, subset, vectorised, true);
         ASSERT_EQ(scalar.capacity, vectorised.capacity);
         if (subset.all)
             EXPECT_TRUE(scalar.compact());
@@ -155,12 +155,12 @@ TEST(NeighbourSearch, CompactListsPermuteRoundTripAndBecomeASlab) {
     UniformGrid grid(Aabb{Vec3d(-1, -1, -1), Vec3d(0.5, 0.5, 0.5)}, h);
     grid.build(pts);
     NeighbourLists lists;
-    build_neighbour_lists(grid, pts, h, true, QuerySubset{}, lists, true);
+    build_neighbour_lists(grid, pts, pts, h, true, QuerySubset{}, lists, true);
     ASSERT_TRUE(lists.compact());
     ASSERT_EQ(lists.blocks.size(), (pts.size() + NeighbourLists::kBlock - 1) / NeighbourLists::kBlock);
 
     NeighbourLists copy;
-    copy.assign_compact(lists.count, lists.concatenated());
+    copy.assign_compact(lists.counts(), lists.concatenated());
     for (Index i = 0; i < pts.size(); ++i) {
         const auto a = lists.of(i), b = copy.of(i);
         ASSERT_EQ(std::vector<Index>(a.begin(), a.end()), std::vector<Index>(b.begin(), b.end())) << "particle " << i;
@@ -179,7 +179,7 @@ TEST(NeighbourSearch, CompactListsPermuteRoundTripAndBecomeASlab) {
     // A subset rebuild turns the layout into a slab and keeps everybody else's list.
     grid.build(moved);
     const std::vector<Index> few{3, 500, 1700};
-    build_neighbour_lists(grid, moved, h, true, QuerySubset{few, false}, lists, true);
+    build_neighbour_lists(grid, moved, moved, h, true, QuerySubset{few, false}, lists, true);
     EXPECT_FALSE(lists.compact());
     expect_equal_to_brute(grid, moved, moved, h, true, lists, all);
 }
@@ -209,15 +209,15 @@ TEST(NeighbourSearch, CompactSubsetListsHoldTheSubsetOnly) {
             expect_equal_to_brute(grid, at, at, h, true, lists, subset);
             for (Index i = 0; i < at.size(); ++i) {
                 if (!in[i]) {
-                    ASSERT_EQ(lists.count[i], 0u) << "particle " << i << " is not in the subset";
+                    ASSERT_EQ(lists.size_of(Index(i)), 0u) << "particle " << i << " is not in the subset";
                 }
             }
             EXPECT_EQ(lists.queried, subset);
         };
-        build_neighbour_lists(grid, pts, h, true, QuerySubset{first, false, false}, lists, simd);
+        build_neighbour_lists(grid, pts, pts, h, true, QuerySubset{first, false, false}, lists, simd);
         ASSERT_TRUE(lists.compact());
         check(pts, first);
-        build_neighbour_lists(grid, pts, h, true, QuerySubset{second, false, false}, lists, simd);
+        build_neighbour_lists(grid, pts, pts, h, true, QuerySubset{second, false, false}, lists, simd);
         check(pts, second);
         // A permutation carries the subset's lists and its rows along.
         std::vector<Index> perm(pts.size()), inverse(pts.size());
@@ -233,9 +233,9 @@ TEST(NeighbourSearch, CompactSubsetListsHoldTheSubsetOnly) {
         grid.build(moved);
         check(moved, carried);
         // The next subset build empties the carried rows that it does not query.
-        build_neighbour_lists(grid, moved, h, true, QuerySubset{first, false, false}, lists, simd);
+        build_neighbour_lists(grid, moved, moved, h, true, QuerySubset{first, false, false}, lists, simd);
         check(moved, first);
-        build_neighbour_lists(grid, moved, h, true, QuerySubset{}, lists, simd);
+        build_neighbour_lists(grid, moved, moved, h, true, QuerySubset{}, lists, simd);
         EXPECT_TRUE(lists.queried.empty());
         expect_equal_to_brute(grid, moved, moved, h, true, lists, all);
     }

@@ -50,8 +50,8 @@ std::string state_bytes(const World& w) {
     s.append(reinterpret_cast<const char*>(&w.clock.t_ticks), sizeof w.clock.t_ticks);
     s.append(reinterpret_cast<const char*>(&w.clock.step), sizeof w.clock.step);
     s.append(reinterpret_cast<const char*>(&w.step_size.dt_ticks), sizeof w.step_size.dt_ticks);
-    s.append(reinterpret_cast<const char*>(w.fluid_neighbours.count.data()),
-             w.fluid_neighbours.count.size() * sizeof(Index));
+    const std::vector<Index> counts = w.fluid_neighbours.counts();
+    s.append(reinterpret_cast<const char*>(counts.data()), counts.size() * sizeof(Index));
     return s;
 }
 

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "engine/data/components.hpp"
+#include "engine/data/world_init.hpp"
 #include "systems/methods/recipes.hpp"
 #include "test_scenes.hpp"
 
@@ -115,7 +116,7 @@ TEST(BoundaryMotion, StaticSceneHasNoMotionMachinery) {
         EXPECT_FALSE(s->access().may_read(key_of(boundary(comp::velocity)))) << s->name();
     }
     const auto names = sim->world().boundary.store.names();
-    EXPECT_EQ(names, (std::vector<std::string>{"normal", "position", "volume"}));
+    EXPECT_EQ(names, (std::vector<std::string>{"position", "volume"}));  // WCSPH reads no normals
     EXPECT_TRUE(sim->world().moving_bodies.empty());
     EXPECT_EQ(sim->world().static_boundary_end, sim->world().boundary.size());
 
@@ -152,4 +153,37 @@ TEST(BoundaryMotion, BodyVolumesAreItsOwn) {
     // the floor.
     EXPECT_LT(max_rel, 5e-6);
     std::printf("body volumes next to the floor vs clear of it: max relative difference %.3g\n", max_rel);
+}
+
+// The boundary's normals are a column only of the methods that read them (PCISPH's collision
+// handling, DFSPH's wall contact); outputs of the others sample them again. The two must agree
+// for every row, bit for bit: the static part in the store's z-order, each moving body as
+// sampled (bodies are translated, never rotated, so a row's normal is constant), also after the
+// bodies have moved.
+TEST(BoundaryNormals, SampledAgainEqualTheStoredColumnInRowOrder) {
+    for (const Method method : {Method::Pcisph, Method::Dfsph}) {
+        Scene scene = moving_scene(SteppingMode::Constant);
+        scene.simulation.method = method;
+        scene.simulation.end_time = 0.02;
+        auto sim = make_simulation(scene);
+        const World& w = sim->world();
+        ASSERT_TRUE(w.boundary.store.has(comp::normal.name));
+        ASSERT_EQ(w.moving_bodies.size(), 3u);
+        sim->run_until(0.02);
+        const auto stored = w.boundary.store.get(comp::normal);
+        const std::vector<Vec3> all = sampled_boundary_normals(w, 0, w.boundary.size());
+        ASSERT_EQ(all.size(), stored.size());
+        std::size_t differ = 0, unit = 0;
+        for (std::size_t i = 0; i < all.size(); ++i) {
+            differ += all[i] != stored[i];
+            unit += std::abs(all[i].norm() - 1) < 1e-5;
+        }
+        EXPECT_EQ(differ, 0u);
+        EXPECT_EQ(unit, all.size());  // not a column of zeros
+        // A range across the static end and into the first body, as the recorder asks for a body.
+        const std::size_t b = w.static_boundary_end - 5, e = w.moving_bodies[1].end;
+        const std::vector<Vec3> part = sampled_boundary_normals(w, b, e);
+        ASSERT_EQ(part.size(), e - b);
+        for (std::size_t i = b; i < e; ++i) EXPECT_EQ(part[i - b], stored[i]) << "row " << i;
+    }
 }

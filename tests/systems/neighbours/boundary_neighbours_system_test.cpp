@@ -51,7 +51,7 @@ TEST(BoundaryNeighbours, GlobalSearchMatchesBruteForce) {
     run_system(BoundaryNeighbourSystem(false), w);
     const auto x = w.fluid.store.get(comp::position);
     const auto xb = w.boundary.store.get(comp::position);
-    ASSERT_EQ(w.boundary_neighbours.count.size(), n);
+    ASSERT_EQ(w.boundary_neighbours.rows(), n);
     std::size_t with_walls = 0, total = 0;
     for (Index i = 0; i < n; ++i) {
         const auto want = brute(x, xb, i, w.physics.h);
