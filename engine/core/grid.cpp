@@ -16,8 +16,8 @@
 
 namespace sph {
 
-UniformGrid::UniformGrid(const Aabb& box, Real cell_size, const std::string& what)
-    : m_cell(cell_size), m_inv_cell(Real(1) / cell_size) {
+UniformGrid::UniformGrid(const Aabb& box, Real cell_size, const std::string& what, bool keep_coordinates)
+    : m_cell(cell_size), m_inv_cell(Real(1) / cell_size), m_keep_coordinates(keep_coordinates) {
     double dims[3], total = 1;
     for (int a = 0; a < 3; ++a) {
         m_origin[a] = Real(box.min[a]) - cell_size;
@@ -35,12 +35,14 @@ UniformGrid::UniformGrid(const Aabb& box, Real cell_size, const std::string& wha
         throw InputError(os.str());
     }
     for (int a = 0; a < 3; ++a) m_dims[a] = static_cast<int>(dims[a]);
-    m_cell_start.assign(std::size_t(total) + 1, 0);
+    m_cells = std::size_t(total);
+    m_chunk_start.assign((m_cells >> kChunkBits) + 1, 0);
+    m_offset.assign(m_cells + 1, 0);
 }
 
 std::size_t UniformGrid::bytes() const {
-    return m_cell_start.capacity() * sizeof(Index) +
-           m_sorted_index.capacity() * sizeof(Index);
+    return (m_chunk_start.capacity() + m_wide.capacity() + m_sorted_index.capacity()) * sizeof(Index) +
+           m_offset.capacity() * sizeof(std::uint16_t) + (m_sx.capacity() + m_sy.capacity() + m_sz.capacity()) * sizeof(Real);
 }
 
 void UniformGrid::build(std::span<const Vec3> positions) {
@@ -53,14 +55,47 @@ void UniformGrid::build(std::span<const Vec3> positions) {
     });
     // Counting sort: particles per cell, their prefix sums (the first slot of each cell), then
     // each particle in index order to the next free slot of its cell (so ties keep index order).
-    std::fill(m_cell_start.begin(), m_cell_start.end(), Index(0));
-    for (std::size_t i = 0; i < n; ++i) ++m_cell_start[cell_of[i] + 1];
-    for (std::size_t c = 1; c <= cells; ++c) m_cell_start[c] += m_cell_start[c - 1];
-    m_sorted_index.resize(n + kPadding, 0);
-    for (std::size_t i = 0; i < n; ++i) m_sorted_index[m_cell_start[cell_of[i]]++] = Index(i);
+    // The starts are built in a scratch table of 32 bits and then packed.
+    std::vector<Index> start(cells + 1, 0);
+    for (std::size_t i = 0; i < n; ++i) ++start[cell_of[i] + 1];
+    for (std::size_t c = 1; c <= cells; ++c) start[c] += start[c - 1];
+    m_sorted_index.resize(n + kPadding);
+    std::fill(m_sorted_index.begin() + std::ptrdiff_t(n), m_sorted_index.end(), Index(0));  // readable: particle 0
+    for (std::size_t i = 0; i < n; ++i) m_sorted_index[start[cell_of[i]]++] = Index(i);
     // The scatter advanced each cell's start to its end (the next cell's start): shift back.
-    std::copy_backward(m_cell_start.begin(), m_cell_start.begin() + std::ptrdiff_t(cells), m_cell_start.end());
-    m_cell_start[0] = 0;
+    std::copy_backward(start.begin(), start.begin() + std::ptrdiff_t(cells), start.end());
+    start[0] = 0;
+    // Pack: per chunk of 16 cells its first start, then each cell's offset from it.
+    constexpr std::size_t kChunk = std::size_t(1) << kChunkBits;
+    Index widest = 0;
+    for (std::size_t q = 0, c0 = 0; c0 <= cells; ++q, c0 += kChunk) {
+        const Index base = start[c0];
+        m_chunk_start[q] = base;
+        const std::size_t c1 = std::min(cells + 1, c0 + kChunk);
+        for (std::size_t c = c0; c < c1; ++c) m_offset[c] = std::uint16_t(start[c] - base);
+        widest = std::max(widest, start[c1 - 1] - base);  // starts rise within a chunk
+    }
+    const bool wide = widest > 0xffff;
+    if (wide)
+        m_wide.swap(start);
+    else
+        std::vector<Index>().swap(m_wide);
+    if (m_keep_coordinates) {
+        // The padding slots hold a point far outside every query's range, so a whole vector
+        // loaded at the end of the last range filters them out.
+        for (auto* axis : {&m_sx, &m_sy, &m_sz}) {
+            axis->resize(n + kPadding);
+            std::fill(axis->begin() + std::ptrdiff_t(n), axis->end(), std::numeric_limits<Real>::max());
+        }
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const auto& r) {
+            for (std::size_t k = r.begin(); k < r.end(); ++k) {
+                const Vec3& x = positions[m_sorted_index[k]];
+                m_sx[k] = x.x();
+                m_sy[k] = x.y();
+                m_sz[k] = x.z();
+            }
+        });
+    }
 }
 
 std::size_t NeighbourLists::bytes() const {
@@ -100,16 +135,24 @@ void CandidateCache::fill(const UniformGrid& grid, std::span<const Vec3> positio
     if (index.size() < size) index.resize(size);
     std::fill(index.begin() + std::ptrdiff_t(count), index.begin() + std::ptrdiff_t(size), Index(0));
     const Index* sorted_index = grid.sorted_index().data();
+    const bool copy = grid.sorted_x() != nullptr;
     std::size_t k = 0;
     for (int r = 0; r < ranges.count; ++r) {
-        for (Index s = ranges.begin[r]; s < ranges.end[r]; ++s, ++k) {
-            const Index j = sorted_index[s];
-            const Vec3& p = positions[j];
-            x[k] = p.x();
-            y[k] = p.y();
-            z[k] = p.z();
-            index[k] = j;
+        const std::size_t b = ranges.begin[r], n = ranges.end[r] - ranges.begin[r];
+        std::copy_n(sorted_index + b, n, index.begin() + std::ptrdiff_t(k));
+        if (copy) {  // the grid's own coordinates, contiguous by slot
+            std::copy_n(grid.sorted_x() + b, n, x.begin() + std::ptrdiff_t(k));
+            std::copy_n(grid.sorted_y() + b, n, y.begin() + std::ptrdiff_t(k));
+            std::copy_n(grid.sorted_z() + b, n, z.begin() + std::ptrdiff_t(k));
+        } else {
+            for (std::size_t s = 0; s < n; ++s) {
+                const Vec3& p = positions[sorted_index[b + s]];
+                x[k + s] = p.x();
+                y[k + s] = p.y();
+                z[k + s] = p.z();
+            }
         }
+        k += n;
     }
 }
 

@@ -31,16 +31,20 @@ public:
     /// @brief Grid covering `box` grown by one cell on every side; positions outside are
     /// clamped into the border cells (the run stops on such particles anyway). Throws
     /// InputError, naming `what`, the box, the cell count and its memory, when the grid would
-    /// have kMaxCells cells or more.
-    UniformGrid(const Aabb& box, Real cell_size, const std::string& what = "grid");
+    /// have kMaxCells cells or more. With `keep_coordinates` the grid also keeps the positions
+    /// in its slot order, one array per axis (12 bytes a particle), which the search copies
+    /// per cell instead of gathering them through the index: measured 1.14-1.21x faster for the
+    /// fluid search (docs/results/benchmarks.md); the boundary's grid, whose candidates are
+    /// rarely filled, does without.
+    UniformGrid(const Aabb& box, Real cell_size, const std::string& what = "grid", bool keep_coordinates = false);
 
     /// Cells are indexed in 32 bits: at most this many (a 16 GiB cell table).
     static constexpr std::uint64_t kMaxCells = (std::uint64_t(1) << 32) - 2;
 
     /// @brief Sorts particle indices by cell (a counting sort, so ties keep index order and the
-    /// result is deterministic). O(N + cells); the cell keys are parallel. The grid keeps no copy
-    /// of the positions: a query reads them from the particle set it was built from, which must
-    /// not be reordered, shrunk or moved between the build and the query.
+    /// result is deterministic). O(N + cells); the cell keys are parallel. A query passes the
+    /// particle set the grid was built from, which must not be reordered, shrunk or moved
+    /// between the build and the query.
     void build(std::span<const Vec3> positions);
 
     /// Readable slots past the last particle in sorted_index() (particle 0), and far points past
@@ -71,7 +75,7 @@ public:
         for (int z = std::max(c[2] - 1, 0); z <= std::min(c[2] + 1, m_dims[2] - 1); ++z)
             for (int y = std::max(c[1] - 1, 0); y <= std::min(c[1] + 1, m_dims[1] - 1); ++y) {
                 const std::int64_t row = cell_index({0, y, z});
-                const Index b = m_cell_start[row + x0], e = m_cell_start[row + x1 + 1];
+                const Index b = cell_start(row + x0), e = cell_start(row + x1 + 1);
                 for (Index k = b; k < e; ++k) fn(m_sorted_index[k], positions[m_sorted_index[k]]);
             }
     }
@@ -86,7 +90,7 @@ public:
         for (int z = std::max(c[2] - 1, 0); z <= std::min(c[2] + 1, m_dims[2] - 1); ++z)
             for (int y = std::max(c[1] - 1, 0); y <= std::min(c[1] + 1, m_dims[1] - 1); ++y) {
                 const std::int64_t row = cell_index({0, y, z});
-                fn(m_cell_start[row + x0], m_cell_start[row + x1 + 1]);
+                fn(cell_start(row + x0), cell_start(row + x1 + 1));
             }
     }
     /// Particle index by sorted slot (particle_count() entries; kPadding readable ones follow).
@@ -104,10 +108,19 @@ public:
         return r;
     }
     std::span<const Index> sorted_index() const { return {m_sorted_index.data(), m_count}; }
+    /// Coordinates by slot, one array per axis (kPadding far points follow the last), or null
+    /// when the grid does not keep them.
+    const Real* sorted_x() const { return m_sx.empty() ? nullptr : m_sx.data(); }
+    const Real* sorted_y() const { return m_sy.empty() ? nullptr : m_sy.data(); }
+    const Real* sorted_z() const { return m_sz.empty() ? nullptr : m_sz.data(); }
+    /// First slot of cell c (c in [0, cell_count()]; cell_count() gives particle_count()).
+    Index cell_start(std::int64_t c) const {
+        return m_wide.empty() ? m_chunk_start[std::size_t(c) >> kChunkBits] + m_offset[std::size_t(c)] : m_wide[std::size_t(c)];
+    }
 
     const Eigen::Vector3i& dims() const { return m_dims; }
     Real cell_size() const { return m_cell; }
-    std::size_t cell_count() const { return m_cell_start.empty() ? 0 : m_cell_start.size() - 1; }
+    std::size_t cell_count() const { return m_cells; }
     std::size_t particle_count() const { return m_count; }
     std::size_t bytes() const;
 
@@ -115,9 +128,19 @@ private:
     Vec3 m_origin = Vec3::Zero();
     Real m_cell = 1, m_inv_cell = 1;
     Eigen::Vector3i m_dims{1, 1, 1};
-    std::vector<Index> m_cell_start;      ///< first sorted slot of each cell; size cells + 1
+    /// The first slot of each cell (cells + 1 entries) as a 32-bit start per chunk of
+    /// 2^kChunkBits cells plus a 16-bit offset per cell: 2.25 bytes a cell instead of 4 (the
+    /// table spans the whole domain, mostly air). A build whose chunk holds 65,536 particles or
+    /// more (particles piled into one place) keeps a 32-bit start per cell instead (m_wide).
+    static constexpr unsigned kChunkBits = 4;
+    std::size_t m_cells = 0;
+    std::vector<Index> m_chunk_start;
+    std::vector<std::uint16_t> m_offset;
+    std::vector<Index> m_wide;
     std::size_t m_count = 0;
     std::vector<Index> m_sorted_index;    ///< particle_count() + kPadding
+    bool m_keep_coordinates = false;
+    std::vector<Real> m_sx, m_sy, m_sz;   ///< with keep_coordinates: particle_count() + kPadding each
 };
 
 /// @brief The candidates of one cell's 27-cell neighbourhood gathered from the grid's particle

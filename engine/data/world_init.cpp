@@ -283,7 +283,7 @@ std::vector<Index> boundary_order(const World& w, std::span<const Vec3> sampled)
 void build_grids(World& w, const std::vector<Vec3d>& bx) {
     const Physics& ph = w.physics;
     auto& bs = w.boundary.store;
-    w.fluid_grid = UniformGrid(w.domain, ph.h, "fluid grid (the scene's domain)");
+    w.fluid_grid = UniformGrid(w.domain, ph.h, "fluid grid (the scene's domain)", /*keep_coordinates=*/true);
     Aabb bbox = w.domain;
     for (const auto& p : bx) {
         bbox.min = bbox.min.cwiseMin(p);

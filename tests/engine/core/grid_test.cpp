@@ -49,18 +49,61 @@ void expect_equal_to_brute(const UniformGrid& grid, std::span<const Vec3> q, std
 }  // namespace
 
 TEST(NeighbourSearch, EqualsBruteForceOnRandomCloud) {
-    // Both filters, the vectorised one (simulation.simd) and the scalar reference.
-    for (const bool simd : {false, true}) {
-        SCOPED_TRACE(simd ? "vectorised filter" : "scalar filter");
-        const Real h = 0.07f;
-        auto pts = cloud(3000, h, 1);
+    // Both filters, the vectorised one (simulation.simd) and the scalar reference; candidates
+    // copied from the grid's own coordinates (the fluid grid) or gathered from the positions.
+    for (const bool keep : {false, true})
+        for (const bool simd : {false, true}) {
+            SCOPED_TRACE(std::string(simd ? "vectorised filter" : "scalar filter") + (keep ? ", kept coordinates" : ""));
+            const Real h = 0.07f;
+            auto pts = cloud(3000, h, 1);
+            UniformGrid grid(Aabb{Vec3d(-1, -1, -1), Vec3d(0.5, 0.5, 0.5)}, h, "grid", keep);
+            grid.build(pts);
+            EXPECT_EQ(grid.sorted_x() != nullptr, keep);
+            NeighbourLists lists;
+            build_neighbour_lists(grid, pts, pts, h, true, QuerySubset{}, lists, simd);
+            std::vector<Index> all(pts.size());
+            for (Index i = 0; i < all.size(); ++i) all[i] = i;
+            expect_equal_to_brute(grid, pts, pts, h, true, lists, all);
+        }
+}
+
+// The cell table packs a 16-bit offset per cell under a 32-bit start per 16 cells; a build with
+// 65,536 or more particles in 16 cells falls back to a 32-bit start per cell. Both give every
+// cell's particles (checked against the particles' own cells) and brute-force lists.
+TEST(NeighbourSearch, CellTableHoldsPilesOfParticlesInOneCell) {
+    const Real h = 0.1f;
+    std::vector<Vec3> pts = cloud(2000, h, 3);
+    const std::size_t spread = pts.size();
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<Real> u(0.0f, 0.04f);
+    for (int k = 0; k < 70000; ++k) pts.emplace_back(0.2f + u(rng), 0.2f + u(rng), 0.2f + u(rng));  // one cell
+    for (const std::size_t n : {spread, pts.size()}) {
+        SCOPED_TRACE(n);
+        const std::span<const Vec3> set(pts.data(), n);
         UniformGrid grid(Aabb{Vec3d(-1, -1, -1), Vec3d(0.5, 0.5, 0.5)}, h);
-        grid.build(pts);
+        grid.build(set);
+        std::vector<std::size_t> in_cell(grid.cell_count(), 0);
+        for (const Vec3& p : set) ++in_cell[std::size_t(grid.cell_of(p))];
+        std::size_t mismatched = 0;
+        for (std::size_t c = 0; c < grid.cell_count(); ++c) {
+            mismatched += grid.cell_start(std::int64_t(c + 1)) - grid.cell_start(std::int64_t(c)) != in_cell[c];
+            for (Index s = grid.cell_start(std::int64_t(c)); s < grid.cell_start(std::int64_t(c + 1)); ++s)
+                mismatched += std::size_t(grid.cell_of(set[grid.sorted_index()[s]])) != c;
+        }
+        EXPECT_EQ(mismatched, 0u);
+        EXPECT_EQ(grid.cell_start(std::int64_t(grid.cell_count())), n);
+        // The packed table is 2.25 bytes a cell, the fallback adds 4 (bytes() counts both).
+        const double table = double(grid.bytes() - (n + UniformGrid::kPadding) * sizeof(Index)) / double(grid.cell_count());
+        if (n == spread)
+            EXPECT_NEAR(table, 2.25, 0.01);
+        else
+            EXPECT_NEAR(table, 6.25, 0.01);
+        // Lists of the spread particles only (a pile's lists are 70,000 long each).
         NeighbourLists lists;
-        build_neighbour_lists(grid, pts, pts, h, true, QuerySubset{}, lists, simd);
-        std::vector<Index> all(pts.size());
-        for (Index i = 0; i < all.size(); ++i) all[i] = i;
-        expect_equal_to_brute(grid, pts, pts, h, true, lists, all);
+        std::vector<Index> some;
+        for (Index i = 0; i < spread; i += 7) some.push_back(i);
+        build_neighbour_lists(grid, set, set, h, true, QuerySubset{some, false, false}, lists, true);
+        expect_equal_to_brute(grid, set, set, h, true, lists, some);
     }
 }
 
