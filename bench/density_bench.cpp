@@ -10,19 +10,27 @@
 
 using namespace sph;
 
+namespace {
+/// Times one density pass per iteration; items and `particles` count every fluid row.
+double time_density(benchmark::State& state, DensitySystem& density, World& w) {
+    for (auto _ : state) {
+        run_system(density, w);
+        benchmark::ClobberMemory();
+    }
+    const double n = double(w.fluid.size());
+    state.SetItemsProcessed(state.iterations() * std::int64_t(n));
+    state.counters["particles"] = n;
+    return n;
+}
+}  // namespace
+
 static void BM_DensitySystem(benchmark::State& state) {
     auto w = bench::lattice_world(std::size_t(state.range(0)));
     DensitySystem density(false);
     density.register_components(*w);
     run_system(FluidGridSystem(), *w);
     run_system(FluidNeighbourSystem(), *w);
-    for (auto _ : state) {
-        run_system(density, *w);
-        benchmark::ClobberMemory();
-    }
-    const double n = double(w->fluid.size());
-    state.SetItemsProcessed(state.iterations() * std::int64_t(n));
-    state.counters["particles"] = n;
+    const double n = time_density(state, density, *w);
     state.counters["neighbours_per_particle"] = double(w->fluid_neighbours.total()) / n;
 }
 BENCHMARK(BM_DensitySystem)->Arg(10'000)->Arg(100'000)->Arg(1'000'000)->Unit(benchmark::kMillisecond)->UseRealTime();
@@ -48,13 +56,7 @@ static void BM_DensitySystemContinuity(benchmark::State& state) {
     w->active_set.clear();
     for (std::size_t i = 0; i < w->fluid.size(); i += std::size_t(100 / share)) w->active_set.push_back(Index(i));
     w->clock.t_ticks = to_ticks(1e-4);
-    for (auto _ : state) {
-        run_system(density, *w);
-        benchmark::ClobberMemory();
-    }
-    const double n = double(w->fluid.size());
-    state.SetItemsProcessed(state.iterations() * std::int64_t(n));
-    state.counters["particles"] = n;
+    const double n = time_density(state, density, *w);
     state.counters["active_rows"] = individual ? double(w->active_set.size()) : n;
 }
 BENCHMARK(BM_DensitySystemContinuity)

@@ -33,9 +33,9 @@ public:
     /// InputError, naming `what`, the box, the cell count and its memory, when the grid would
     /// have kMaxCells cells or more. With `keep_coordinates` the grid also keeps the positions
     /// in its slot order, one array per axis (12 bytes a particle), which the search copies
-    /// per cell instead of gathering them through the index: measured 1.14-1.21x faster for the
-    /// fluid search (docs/results/benchmarks.md); the boundary's grid, whose candidates are
-    /// rarely filled, does without.
+    /// per cell instead of gathering them through the index (faster for the fluid search; the
+    /// boundary's grid, whose candidates are rarely filled, does without: measured in
+    /// docs/results/benchmarks.md).
     UniformGrid(const Aabb& box, Real cell_size, const std::string& what = "grid", bool keep_coordinates = false);
 
     /// Cells are indexed in 32 bits: at most this many (a 16 GiB cell table).
