@@ -9,7 +9,6 @@
 #include <vector>
 
 #include "bench_util.hpp"
-#include "systems/active/halo_system.hpp"
 #include "systems/active/select_active_system.hpp"
 #include "systems/density/density_system.hpp"
 #include "systems/forces/forces_system.hpp"
@@ -33,7 +32,6 @@ struct Pipeline {
         systems.push_back(std::make_unique<SelectActiveSystem>());
         systems.push_back(std::make_unique<FluidGridSystem>());
         systems.push_back(std::make_unique<FluidNeighbourSystem>(true));
-        systems.push_back(std::make_unique<HaloSystem>(false));
         systems.push_back(std::make_unique<DensitySystem>(false, true));
         // The correction's own cost (fluid.pressure_gradient: corrected); `forces` below stays
         // the symmetric form, comparable with the global benchmarks.
@@ -102,7 +100,6 @@ void args(benchmark::internal::Benchmark* b) {
 
 SPH_INDIVIDUAL_BENCH(select_active);
 SPH_INDIVIDUAL_BENCH(fluid_neighbours);
-SPH_INDIVIDUAL_BENCH(halo);
 SPH_INDIVIDUAL_BENCH(density);
 SPH_INDIVIDUAL_BENCH(gradient_correction);
 SPH_INDIVIDUAL_BENCH(forces);

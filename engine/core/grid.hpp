@@ -240,9 +240,17 @@ std::vector<Index> collect_indices(std::size_t n, Pred&& pred) {
     const std::size_t blocks = (n + kBlock - 1) / kBlock;
     std::vector<std::vector<Index>> parts(blocks);
     tbb::parallel_for(std::size_t(0), blocks, [&](std::size_t b) {
-        const std::size_t end = std::min(n, (b + 1) * kBlock);
-        for (std::size_t i = b * kBlock; i < end; ++i)
-            if (pred(i)) parts[b].push_back(Index(i));
+        // Branch-free (each index written, the count advanced by the predicate): a branch on a
+        // predicate true for a scattered share of the particles mispredicts often.
+        const std::size_t begin = b * kBlock, end = std::min(n, begin + kBlock);
+        auto& part = parts[b];
+        part.resize(end - begin);
+        std::size_t kept = 0;
+        for (std::size_t i = begin; i < end; ++i) {
+            part[kept] = Index(i);
+            kept += std::size_t(bool(pred(i)));
+        }
+        part.resize(kept);
     });
     std::vector<Index> out;
     for (const auto& p : parts) out.insert(out.end(), p.begin(), p.end());

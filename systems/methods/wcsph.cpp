@@ -1,7 +1,6 @@
 #include "systems/methods/wcsph.hpp"
 
 #include "systems/active/binned_select_system.hpp"
-#include "systems/active/halo_system.hpp"
 #include "systems/active/select_active_system.hpp"
 #include "systems/boundary/boundary_collision_system.hpp"
 #include "systems/boundary/boundary_motion_system.hpp"
@@ -47,7 +46,6 @@ Recipe make_wcsph_recipe(const Scene& scene) {
     // binned reads only the active particles' lists: compact, the others emptied.
     r.step.push_back(std::make_unique<FluidNeighbourSystem>(individual, !binned));
     if (boundary) r.step.push_back(std::make_unique<BoundaryNeighbourSystem>(individual, !binned));
-    if (mode == SteppingMode::Individual) r.step.push_back(std::make_unique<HaloSystem>(boundary));
     const bool continuity = scene.fluid.density == DensityForm::Continuity;
     r.step.push_back(std::make_unique<DensitySystem>(boundary, individual, continuity, moving));
     const bool corrected = scene.fluid.pressure_gradient == PressureGradient::Corrected;

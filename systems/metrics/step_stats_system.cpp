@@ -50,7 +50,10 @@ void StepStatsSystem::run(Context& ctx) {
                     acc.a2_max = a2;
                     acc.a_arg = Index(i);
                 }
-                if (i < lists.rows() && (!is_active || is_active[i])) acc.pairs += lists.size_of(Index(i));
+                // Branch-free: the active flag is scattered (a branch on it mispredicts often).
+                if (i < lists.rows())
+                    acc.pairs += is_active ? lists.size_of(Index(i)) * std::uint64_t(is_active[i] != 0)
+                                           : lists.size_of(Index(i));
             }
             return acc;
         },

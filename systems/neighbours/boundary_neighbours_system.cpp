@@ -18,12 +18,19 @@ Access BoundaryNeighbourSystem::access() const {
     return Access()
         .read(fluid(comp::position), boundary(comp::position), res::boundary_grid)
         .write(res::boundary_neighbours)
-        .read_if(m_individual, res::active_set);
+        .read_if(m_individual, res::active_set)
+        .write_if(m_individual && m_keep_others, counter::boundary_contributions);
 }
 void BoundaryNeighbourSystem::run(Context& ctx) {
     build_neighbour_lists(ctx.read(res::boundary_grid), ctx.read(boundary(comp::position)), ctx.read(fluid(comp::position)),
                           ctx.physics().h, false,
                           subset_of(ctx, m_individual, m_keep_others), ctx.write(res::boundary_neighbours), ctx.physics().simd);
+    if (m_individual && m_keep_others) {  // He's scheme: the work counter of the rows built
+        const NeighbourLists& lists = ctx.read(res::boundary_neighbours);
+        std::uint64_t entries = 0;
+        for (Index i : ctx.read(res::active_set)) entries += lists.size_of(i);
+        ctx.write(counter::boundary_contributions) = entries;
+    }
 }
 
 }  // namespace sph
