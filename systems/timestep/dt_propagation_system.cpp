@@ -92,47 +92,31 @@ void DtPropagationSystem::run(Context& ctx) {
             dt[i] = m;
         }
     });
-    // The halo: reached and inactive, ascending, with the minimum that reached it; the arrays
-    // are reset in the same pass. One streaming pass over a value per particle and worker
-    // (He's scheme selects its active set by a pass over every particle anyway).
+    // The halo: reached and inactive, ascending (one streaming pass over a value per particle
+    // and worker; He's scheme selects its active set by a pass over every particle anyway).
     std::vector<double*> reaches;
     for (auto& r : m_reach)
         if (r.size() == n) reaches.push_back(r.data());
-    constexpr std::size_t kBlock = 4096;
-    const std::size_t blocks = (n + kBlock - 1) / kBlock;
-    m_parts.resize(blocks);
-    m_part_reach.resize(blocks);
-    tbb::parallel_for(std::size_t(0), blocks, [&](std::size_t b) {
-        const std::size_t begin = b * kBlock, end = std::min(n, begin + kBlock);
-        auto& part = m_parts[b];
-        auto& mins = m_part_reach[b];
-        part.resize(end - begin);
-        mins.resize(end - begin);
-        std::size_t kept = 0;
-        for (std::size_t i = begin; i < end; ++i) {
-            double m = kNone;
-            for (double* r : reaches) {
-                m = std::min(m, r[i]);
-                r[i] = kNone;
-            }
-            part[kept] = Index(i);
-            mins[kept] = m;
-            kept += std::size_t((m < kNone) & (active[i] == 0));
-        }
-        part.resize(kept);
-        mins.resize(kept);
-    });
-    for (const auto& p : m_parts) halo.insert(halo.end(), p.begin(), p.end());
+    const auto reached = [&](std::size_t i) {
+        double m = kNone;
+        for (const double* r : reaches) m = std::min(m, r[i]);
+        return m;
+    };
+    halo = collect_indices(n, [&](std::size_t i) { return (reached(i) < kNone) & (active[i] == 0); });
     // The halo over its own lists (from its last evaluation), which may miss an active particle
-    // that now reaches it: hence the reached minimum as the start.
-    tbb::parallel_for(std::size_t(0), blocks, [&](std::size_t b) {
-        const auto& part = m_parts[b];
-        const auto& mins = m_part_reach[b];
-        for (std::size_t k = 0; k < part.size(); ++k) {
-            const Index j = part[k];
-            if (k + kAhead < part.size()) prefetch_list(lists, part[k + kAhead]);
-            dt[j] = min_over(lists.of(j), dt_raw, std::min(dt_raw[j], mins[k]));
+    // that now reaches it: hence the reached minimum as the start. Then every reached row's
+    // entries are reset (the halo's here, the active rows' below).
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, halo.size(), 512), [&](const auto& r) {
+        for (std::size_t k = r.begin(); k < r.end(); ++k) {
+            const Index j = halo[k];
+            if (k + kAhead < r.end()) prefetch_list(lists, halo[k + kAhead]);
+            dt[j] = min_over(lists.of(j), dt_raw, std::min(dt_raw[j], reached(j)));
+            for (double* w : reaches) w[j] = kNone;
         }
+    });
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, na, 4096), [&](const auto& r) {
+        for (std::size_t k = r.begin(); k < r.end(); ++k)
+            for (double* w : reaches) w[set[k]] = kNone;
     });
     ctx.write(counter::propagation_updates) = na + halo.size();
 }

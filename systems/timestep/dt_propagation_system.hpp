@@ -28,8 +28,6 @@ private:
     /// Per worker, the smallest Delta t^raw of an active particle reaching each particle
     /// (+infinity between runs).
     tbb::enumerable_thread_specific<std::vector<double>> m_reach;
-    std::vector<std::vector<Index>> m_parts;        ///< the halo of each block of particles
-    std::vector<std::vector<double>> m_part_reach;  ///< and the minimum reaching each
 };
 
 }  // namespace sph
