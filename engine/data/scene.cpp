@@ -84,6 +84,16 @@ const char* to_string(DensityForm d) {
     return "unknown";
 }
 
+const char* to_string(WallPressure w) {
+    switch (w) {
+        case WallPressure::Mirrored:
+            return "mirrored";
+        case WallPressure::Extrapolated:
+            return "extrapolated";
+    }
+    return "unknown";
+}
+
 const char* to_string(Activation a) {
     switch (a) {
         case Activation::Deadline:
@@ -168,6 +178,11 @@ BoundaryDesc translated(const BoundaryDesc& b, const Vec3d& d) {
     out.center += d;
     for (auto& v : out.vertices) v += d;
     return out;
+}
+
+WallPressure wall_pressure(const Scene& scene) {
+    if (scene.fluid.wall_pressure) return *scene.fluid.wall_pressure;
+    return scene.fluid.density == DensityForm::Continuity ? WallPressure::Extrapolated : WallPressure::Mirrored;
 }
 
 bool has_moving_boundaries(const Scene& scene) {

@@ -43,6 +43,12 @@ enum class PressureGradient { Symmetric, Corrected };
 /// the delta-SPH density diffusion (fluid.density_diffusion; Molteni & Colagrossi 2009 with the
 /// hydrostatic correction of Fourtakas et al. 2019), starting from the summation density.
 enum class DensityForm { Summation, Continuity };
+/// WCSPH: the pressure a boundary particle b exerts on a fluid neighbour i, in
+/// a_i -= sum_b psi_b (p_i / rho_i^2 + p_b / rho_b^2) grad W_ib. `mirrored`: p_b = p_i and
+/// rho_b = rho_i (Akinci et al. 2012 with He et al.'s pressure mirroring), the force 2 p_i / rho_i^2;
+/// `extrapolated`: p_b from the fluid around b with the hydrostatic term (Adami, Hu & Adams 2012,
+/// eq. 27), rho_b from the equation of state (systems/boundary/wall_pressure_system.hpp).
+enum class WallPressure { Mirrored, Extrapolated };
 /// When `individual` evaluates a particle whose deadline t_last + Delta t_i is near (the rule
 /// behind He et al. Alg. 2 line 2). `deadline`: at the last step that starts before the
 /// deadline, and no step is longer than the earliest deadline it would carry an inactive
@@ -59,6 +65,7 @@ const char* to_string(PcisphLoop l);
 const char* to_string(BoundaryHandling b);
 const char* to_string(PressureGradient g);
 const char* to_string(DensityForm d);
+const char* to_string(WallPressure w);
 const char* to_string(Activation a);
 /// @brief Every method and every stepping mode the loader knows, by name (sph-run --list-modes;
 /// the study tool runs each pair a scene accepts, so a new mode joins it with no new code).
@@ -154,6 +161,9 @@ struct FluidParams {
     std::optional<double> density_diffusion;
     /// Kinematic viscosity nu (m^2/s) of the laminar term of Morris et al. 1997 (WCSPH; 0: none).
     double kinematic_viscosity = 0.0;
+    /// WCSPH only: the boundary particles' pressure (WallPressure). Unset: `extrapolated` with the
+    /// continuity density, `mirrored` with the summation density.
+    std::optional<WallPressure> wall_pressure;
 };
 
 /// @brief A block of fluid particles on a cubic lattice of spacing 2 r, filling [min, max].
@@ -293,6 +303,10 @@ struct Scene {
     /// @brief Particle radius after `scale`.
     double particle_radius() const;
 };
+
+/// @brief The wall pressure a WCSPH scene runs with: fluid.wall_pressure, or unset `extrapolated`
+/// with the continuity density and `mirrored` with the summation density.
+WallPressure wall_pressure(const Scene& scene);
 
 /// @brief True when any boundary of the scene has a motion.
 bool has_moving_boundaries(const Scene& scene);

@@ -35,10 +35,10 @@ inline constexpr std::array<const char*, 8> k_simulation_keys{
     "method", "stepping", "end_time", "frame_rate", "scale", "gravity", "sort_interval", "simd"};
 inline constexpr std::array<const char*, 9> k_stepping_keys{"mode",     "dt",       "lambda_v", "lambda_f", "acoustic",
                                                      "lambda_c", "dt_max",   "dt_min",   "activation"};
-inline constexpr std::array<const char*, 12> k_fluid_keys{
+inline constexpr std::array<const char*, 13> k_fluid_keys{
     "rest_density",      "particle_radius", "viscosity", "speed_of_sound",    "density_fluctuation", "surface_tension",
     "boundary_viscosity", "pressure_gradient", "support", "density",           "density_diffusion",
-    "kinematic_viscosity"};
+    "kinematic_viscosity", "wall_pressure"};
 inline constexpr std::array<const char*, 2> k_box_keys{"min", "max"};
 inline constexpr std::array<const char*, 4> k_block_keys{"min", "max", "velocity", "hydrostatic"};
 inline constexpr std::array<const char*, 4> k_boxlike_boundary_keys{"type", "min", "max", "motion"};
@@ -67,6 +67,7 @@ inline constexpr std::array<BoundaryHandling, 2> k_handlings{BoundaryHandling::I
                                                       BoundaryHandling::DirectForcing};
 inline constexpr std::array<PressureGradient, 2> k_gradients{PressureGradient::Symmetric, PressureGradient::Corrected};
 inline constexpr std::array<DensityForm, 2> k_density_forms{DensityForm::Summation, DensityForm::Continuity};
+inline constexpr std::array<WallPressure, 2> k_wall_pressures{WallPressure::Mirrored, WallPressure::Extrapolated};
 inline constexpr std::array<Activation, 2> k_activations{Activation::Deadline, Activation::Paper};
 inline constexpr std::array<BoundaryShape, 6> k_shapes{BoundaryShape::Container, BoundaryShape::Box,
                                                 BoundaryShape::Sphere,    BoundaryShape::Cylinder,

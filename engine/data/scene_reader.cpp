@@ -246,6 +246,12 @@ class Reader {
                     "evaluation and has nothing to diffuse",
                     {"/fluid/density_diffusion", "/fluid/density"});
         }
+        if (s.fluid.wall_pressure && !wcsph) {
+            fail_at("/fluid/wall_pressure", dump_at("/fluid/wall_pressure"),
+                    "no key: the wall pressure is chosen for method \"wcsph\" only (PCISPH and DFSPH give their "
+                    "boundary particles their own pressure)",
+                    {"/fluid/wall_pressure", "/simulation/method"});
+        }
         if (s.fluid.kinematic_viscosity > 0 && !wcsph) {
             fail_at("/fluid/kinematic_viscosity", dump_at("/fluid/kinematic_viscosity"),
                     "0 or no key: the laminar viscosity (Morris et al. 1997) is implemented for method \"wcsph\" only",
@@ -595,6 +601,7 @@ class Reader {
             p.density_diffusion = number(n.at(*v, "density_diffusion"),
                                          {0.0, true, 1.0, true, "delta of the delta-SPH diffusion term (0.1 typical)"});
         read_number(n, "kinematic_viscosity", non_negative("m^2/s (water: 1e-6)"), p.kinematic_viscosity);
+        if (const json* v = n.find("wall_pressure")) p.wall_pressure = pick_enum(n.at(*v, "wall_pressure"), k_wall_pressures);
     }
 
     Aabb read_box(const Node& n) const {

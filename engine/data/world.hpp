@@ -34,6 +34,7 @@ struct Physics {
     /// WCSPH `fluid.density: continuity`: the density is integrated (He eq. 5 plus diffusion).
     bool continuity = false;
     Real density_diffusion = 0;     ///< delta-SPH delta (continuity only; 0: none)
+    bool extrapolated_wall_pressure = false;  ///< WallPressure::Extrapolated (WCSPH)
     Real kinematic_viscosity = 0;   ///< nu of the laminar term (Morris et al. 1997), m^2/s
     Vec3 gravity = Vec3::Zero();
     double fluid_height = 0;  ///< m, used for the default c_s

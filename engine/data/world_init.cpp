@@ -77,6 +77,7 @@ void derive_constants(World& w, const Scene& scene) {
     ph.boundary_viscosity = Real(scene.fluid.boundary_viscosity.value_or(scene.fluid.viscosity));
     ph.gravity = scene.simulation.gravity.cast<Real>();
     ph.continuity = scene.fluid.density == DensityForm::Continuity;
+    ph.extrapolated_wall_pressure = scene.simulation.method == Method::Wcsph && wall_pressure(scene) == WallPressure::Extrapolated;
     ph.density_diffusion = ph.continuity ? Real(scene.fluid.density_diffusion.value_or(0.1)) : Real(0);
     ph.kinematic_viscosity = Real(scene.fluid.kinematic_viscosity);
 #ifdef SPH_DOUBLE

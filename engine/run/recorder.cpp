@@ -421,7 +421,8 @@ nlohmann::json Recorder::finish(const Simulation& sim, double wall_seconds, int 
                     {"boundary_viscosity", w.physics.boundary_viscosity},
                     {"density", w.physics.continuity ? "continuity" : "summation"},
                     {"density_diffusion", w.physics.density_diffusion},
-                    {"kinematic_viscosity", w.physics.kinematic_viscosity}};
+                    {"kinematic_viscosity", w.physics.kinematic_viscosity},
+                    {"wall_pressure", w.physics.extrapolated_wall_pressure ? "extrapolated" : "mirrored"}};
     j["frames"] = m_frame;
     if (m_surface_frames > 0) {
         // The surface's cost per frame, also in steps of this run (an average step's time in

@@ -1,6 +1,7 @@
 // He et al. eq. 4, a_i = -sum_j m_j (p_i/rho_i^2 + p_j/rho_j^2 + Pi_ij) grad W_ij + g, with
 // Monaghan 1992's Pi_ij (forces_kernels.hpp), the Akinci et al. 2012 eq. 10 boundary term with
-// pressure mirroring, -sum_b psi_b (2 p_i/rho_i^2 + Pi_ib) grad W_ib (psi_b = rho0 V_b,
+// pressure mirroring, -sum_b psi_b (2 p_i/rho_i^2 + Pi_ib) grad W_ib (psi_b = rho0 V_b; with
+// extrapolated walls p_i/rho_i^2 + p_b/rho_b^2, Adami et al. 2012 eq. 27,
 // Pi_ib with rho_b = rho0 and v_ib = v_i - v_b), and He eq. 5's drho_i/dt =
 // sum_j m_j v_ij . grad W_ij + sum_b psi_b v_ib . grad W_ib: the formulas of forces_system.cpp,
 // vectorised across each particle's neighbour list (positions, velocities, densities and
@@ -106,6 +107,10 @@ void ForceRows(const ForcePairArgs& a, const Index* rows, std::size_t begin, std
                 const auto s = hn::IfThenElseZero(c.in, k.grad_factor(d, hn::Sqrt(c.r2)));
                 const Broadcast3<D> vib = relative_velocity(d, vi, a.vel_b, c);  // v_i - v_b
                 auto coef = two_pi;
+                if (a.p_b) {  // p_i / rho_i^2 + p_b / rho_b^2 (extrapolated walls)
+                    const auto rb = hn::GatherIndex(d, a.rho_b, c.j);
+                    coef = hn::Add(hn::Set(d, pi_s), hn::Div(hn::GatherIndex(d, a.p_b, c.j), hn::Mul(rb, rb)));
+                }
                 if (viscous_b)
                     coef = hn::Add(coef, monaghan(dot3(vib.x, vib.y, vib.z, c.dx, c.dy, c.dz), c.r2, alpha_b_2hc,
                                                   hn::Add(vrhoi, rho0), eps_h2));

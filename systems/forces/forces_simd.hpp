@@ -21,6 +21,8 @@ struct ForcePairArgs {
     const Real* xb = nullptr;        ///< boundary positions (nullptr: no boundary terms)
     const Real* volume_b = nullptr;
     const Real* vel_b = nullptr;     ///< boundary velocities, xyz (nullptr: static walls)
+    const Real* p_b = nullptr;       ///< extrapolated wall pressure and density (nullptr: mirrored, p_b = p_i)
+    const Real* rho_b = nullptr;
     const NeighbourLists* boundary = nullptr;
     const CubicSpline* kernel = nullptr;
     Real mass = 0, alpha = 0, alpha_b = 0, speed_of_sound = 0, h = 0, rest_density = 0;

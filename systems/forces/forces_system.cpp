@@ -1,7 +1,9 @@
 // He et al. eq. 4: a_i = -sum_j m_j (p_i/rho_i^2 + p_j/rho_j^2) grad W_ij + g,
 // plus Monaghan 1992 artificial viscosity -sum_j m_j Pi_ij grad W_ij (forces_kernels.hpp).
 // Boundary (Akinci et al. 2012 eq. 10 with pressure mirroring p_b = p_i, rho_b = rho_i):
-// a_i -= sum_b psi_b (2 p_i / rho_i^2) grad W_ib, psi_b = rho0 V_b; viscosity against the wall
+// a_i -= sum_b psi_b (2 p_i / rho_i^2) grad W_ib, psi_b = rho0 V_b; with `fluid.wall_pressure:
+// extrapolated` (p_b, rho_b of WallPressureSystem, Adami et al. 2012 eq. 27)
+// a_i -= sum_b psi_b (p_i / rho_i^2 + p_b / rho_b^2) grad W_ib. Viscosity against the wall
 // uses the same Pi with rho_j = rho0 and the wall's velocity (zero for static walls): for a
 // moving boundary, Pi_ib is evaluated with the relative velocity v_ib = v_i - v_b (Akinci et
 // al. 2012 sec. 3.3, eq. 11-12: the boundary viscosity acts on the velocity relative to the
@@ -41,6 +43,7 @@ Access ForcesSystem::access() const {
                    .write(fluid(comp::acceleration), counter::force_evaluations)
                    .read_if(m_with_boundary, res::boundary_neighbours, boundary(comp::position), boundary(comp::volume))
                    .read_if(m_with_boundary && m_moving_boundary, boundary(comp::velocity))
+                   .read_if(m_extrapolated, boundary(comp::pressure), boundary(comp::density))
                    .read_if(m_corrected, fluid(comp::gradient_correction))
                    .read_if(m_individual, res::active_set)
                    .write_if(m_individual && !m_continuity, fluid(comp::drho_dt))
@@ -81,6 +84,10 @@ void ForcesSystem::run(Context& ctx) {
     const Real m = ph.mass, alpha = ph.viscosity, c = ph.speed_of_sound, h = ph.h, rho0 = ph.rest_density;
     const Real alpha_b = ph.boundary_viscosity;  // 0: free-slip walls (pressure force only)
     const Vec3 g = ph.gravity;
+    // Extrapolated walls: p_b and rho_b of WallPressureSystem (Adami et al. 2012 eq. 27); else
+    // mirrored, p_b / rho_b^2 = p_i / rho_i^2.
+    const std::span<const Real> pb = m_extrapolated ? ctx.read(boundary(comp::pressure)) : std::span<const Real>{};
+    const std::span<const Real> rhob = m_extrapolated ? ctx.read(boundary(comp::density)) : std::span<const Real>{};
     const Real nu4 = Real(4) * ph.kinematic_viscosity, eps_h2 = Real(0.01) * h * h;  // laminar viscosity
     std::span<Real> drho;
     std::span<double> dt_raw;
@@ -123,10 +130,11 @@ void ForcesSystem::run(Context& ctx) {
                 const Vec3 grad = kernel.grad(xib, std::sqrt(r2));
                 const Vec3 vib = moving ? Vec3(vi - vel_b[b]) : vi;  // relative velocity v_i - v_b
                 const Real visc = alpha_b > 0 ? monaghan_pi(vib.dot(xib), r2, alpha_b, c, h, rhoi, rho0) : Real(0);
+                const Real pterm = pb.empty() ? Real(2) * pi : pi + pb[b] / (rhob[b] * rhob[b]);
                 if constexpr (Corrected)
-                    a -= (rho0 * vb[b] * Real(2) * pi) * (L[i] * grad) + (rho0 * vb[b] * visc) * grad;
+                    a -= (rho0 * vb[b] * pterm) * (L[i] * grad) + (rho0 * vb[b] * visc) * grad;
                 else
-                    a -= (rho0 * vb[b] * (Real(2) * pi + visc)) * grad;
+                    a -= (rho0 * vb[b] * (pterm + visc)) * grad;
                 if (nu4 > 0 && alpha_b > 0)  // no-slip walls: the laminar term against v_b
                     a += (rho0 * vb[b] * laminar_coefficient(xib.dot(grad), r2, nu4, rhoi, rho0, eps_h2)) * vib;
                 if constexpr (Drho) div += rho0 * vb[b] * vib.dot(grad);  // He eq. 5, boundary term
@@ -149,6 +157,8 @@ void ForcesSystem::run(Context& ctx) {
             vec.xb = xb.data()->data();
             vec.volume_b = vb.data();
             vec.vel_b = moving ? vel_b.data()->data() : nullptr;
+            vec.p_b = pb.empty() ? nullptr : pb.data();
+            vec.rho_b = rhob.empty() ? nullptr : rhob.data();
             vec.boundary = boundary_nb;
         }
         vec.kernel = &kernel;

@@ -21,12 +21,14 @@ class ForcesSystem final : public System {
 public:
     /// @param stepping the step rules of Delta t_i^raw (individual stepping only).
     explicit ForcesSystem(bool with_boundary, bool individual = false, bool moving_boundary = false,
-                          bool corrected = false, SteppingParams stepping = {}, bool continuity = false)
+                          bool corrected = false, SteppingParams stepping = {}, bool continuity = false,
+                          bool extrapolated_walls = false)
         : m_with_boundary(with_boundary),
           m_individual(individual),
           m_moving_boundary(moving_boundary),
           m_corrected(corrected),
           m_continuity(continuity),
+          m_extrapolated(with_boundary && extrapolated_walls),
           m_stepping(stepping) {}
     std::string name() const override { return "forces"; }
     Access access() const override;
@@ -35,6 +37,7 @@ public:
 
 private:
     bool m_with_boundary, m_individual, m_moving_boundary, m_corrected, m_continuity;
+    bool m_extrapolated;  ///< the walls' pressure from WallPressureSystem, else mirrored (p_b = p_i)
     SteppingParams m_stepping;
 };
 

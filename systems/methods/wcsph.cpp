@@ -5,6 +5,7 @@
 #include "systems/boundary/boundary_collision_system.hpp"
 #include "systems/boundary/boundary_motion_system.hpp"
 #include "systems/boundary/boundary_volume_system.hpp"
+#include "systems/boundary/wall_pressure_system.hpp"
 #include "systems/density/density_system.hpp"
 #include "systems/forces/forces_system.hpp"
 #include "systems/forces/gradient_correction_system.hpp"
@@ -48,9 +49,13 @@ Recipe make_wcsph_recipe(const Scene& scene) {
     if (boundary) r.step.push_back(std::make_unique<BoundaryNeighbourSystem>(individual, !binned));
     const bool continuity = scene.fluid.density == DensityForm::Continuity;
     r.step.push_back(std::make_unique<DensitySystem>(boundary, individual, continuity, moving));
+    // The walls' pressure from the fluid around them (Adami et al. 2012), once the fluid's is known.
+    const bool extrapolated = boundary && wall_pressure(scene) == WallPressure::Extrapolated;
+    if (extrapolated) r.step.push_back(std::make_unique<WallPressureSystem>(individual));
     const bool corrected = scene.fluid.pressure_gradient == PressureGradient::Corrected;
     if (corrected) r.step.push_back(std::make_unique<GradientCorrectionSystem>(boundary, individual));
-    r.step.push_back(std::make_unique<ForcesSystem>(boundary, individual, moving, corrected, stepping, continuity));
+    r.step.push_back(
+        std::make_unique<ForcesSystem>(boundary, individual, moving, corrected, stepping, continuity, extrapolated));
     r.step.push_back(std::make_unique<StepStatsSystem>(
         individual, binned ? StepStatsSystem::Rows::Active : StepStatsSystem::Rows::All));
     if (binned) {

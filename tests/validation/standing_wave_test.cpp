@@ -14,6 +14,7 @@
 #include <cmath>
 #include <cstdio>
 #include <numbers>
+#include <optional>
 
 #include "engine/data/components.hpp"
 #include "engine/run/simulation.hpp"
@@ -30,7 +31,8 @@ struct Wave {
     int crossings = 0, extrema = 0;
 };
 
-Wave run_wave(double r, bool continuity, double alpha, double nu, double end) {
+Wave run_wave(double r, bool continuity, double alpha, double nu, double end, double settle,
+              std::optional<WallPressure> walls = {}) {
     Scene s;
     s.name = "standing_wave";
     s.fluid.particle_radius = r;
@@ -38,6 +40,7 @@ Wave run_wave(double r, bool continuity, double alpha, double nu, double end) {
     s.fluid.boundary_viscosity = 0.0;  // free-slip walls: no boundary layers
     s.fluid.kinematic_viscosity = nu;
     s.fluid.density = continuity ? DensityForm::Continuity : DensityForm::Summation;
+    s.fluid.wall_pressure = walls;
     s.fluid_blocks.push_back(FluidBlock{Aabb{Vec3d::Zero(), Vec3d(kL, kDepth, kWidth)}, Vec3d::Zero(), true});
     BoundaryDesc b;
     b.shape = BoundaryShape::Container;
@@ -45,9 +48,13 @@ Wave run_wave(double r, bool continuity, double alpha, double nu, double end) {
     s.boundaries.push_back(b);
     s.simulation.gravity = Vec3d(0, -kG, 0);
     s.simulation.frame_rate = 0;
-    s.simulation.end_time = end;
+    s.simulation.end_time = settle + end;
     auto sim = make_simulation(s);
+    const WallPressure sm_walls = wall_pressure(s);
     const double k = std::numbers::pi / kL, omega = std::sqrt(kG * k * std::tanh(k * kDepth));
+    // The tank first comes to rest: the lattice start is not the discrete equilibrium, and the
+    // motion of its settling (~0.1 J here, as much as the wave's) would otherwise ride on the wave.
+    if (settle > 0) sim->run_until(settle);
     {
         World& w = sim->world();
         const auto x = w.fluid.store.get(comp::position);
@@ -59,14 +66,14 @@ Wave run_wave(double r, bool continuity, double alpha, double nu, double end) {
         }
     }
     std::vector<double> t, xc;
-    double next = 0;
-    sim->run_until(end, [&](const Simulation& sm) {
+    double next = settle;
+    sim->run_until(settle + end, [&](const Simulation& sm) {
         const World& w = sm.world();
         if (w.clock.t < next) return;
         next = w.clock.t + 2e-3;
         double sum = 0;
         for (const Vec3& p : w.fluid.store.get(comp::position)) sum += p.x();
-        t.push_back(w.clock.t);
+        t.push_back(w.clock.t - settle);
         xc.push_back(sum / double(w.fluid.size()) - kL / 2);
     });
     Wave out;
@@ -97,39 +104,42 @@ Wave run_wave(double r, bool continuity, double alpha, double nu, double end) {
         for (std::size_t i = 0; i < ext_t.size(); ++i) num += (ext_t[i] - mt) * (ext_v[i] - mv), den += std::pow(ext_t[i] - mt, 2);
         out.decay = -num / den;
     }
-    std::printf("r = %.4g m, %s, alpha %.3g, nu %.3g: period %.4f s (%d crossings), decay %.4f 1/s (%d extrema), x_cm(0..) amplitude %.4g m\n",
-                r, continuity ? "continuity + delta-SPH" : "summation", alpha, nu, out.period, out.crossings, out.decay,
+    std::printf("r = %.4g m, %s, %s walls, alpha %.3g, nu %.3g: period %.4f s (%d crossings), decay %.4f 1/s (%d extrema), x_cm(0..) amplitude %.4g m\n",
+                r, continuity ? "continuity + delta-SPH" : "summation", to_string(sm_walls), alpha, nu, out.period, out.crossings, out.decay,
                 out.extrema, ext_v.empty() ? 0.0 : std::exp(ext_v.front()));
     return out;
 }
 
 }  // namespace
 
-// What it measures today (2026-12-03, r = 1 cm: 25 particles deep, 100 per wavelength): the
-// period is 3.3 % short (continuity + delta-SPH, alpha 0) and 3.6 % short (summation, alpha
-// 0.1), and the amplitude decays at 0.40 1/s and 0.44 1/s where the laminar nu = 2e-3 m^2/s
-// predicts 0.039 1/s: the dissipation is numerical and ten times the physical one. It is not
-// the diffusion (delta = 0 decays at 0.41 1/s) nor the artificial viscosity (alpha = 0 here).
-// The issue's targets (period within 2 %, decay within 20 %) are not met at this resolution; the
-// test holds what is measured, so that a change that adds dissipation or detunes the wave fails:
-// the period within 4 % and the decay of the continuity run at most 0.95 of the alpha = 0.1 run's
-// (measured 0.91) and at least the laminar prediction.
+// What it measures (2026-12-03, r = 1 cm: 25 particles deep, 100 per wavelength; each run first
+// rests 1.5 s, then the wave's velocity field is imposed):
+//   continuity + delta-SPH, alpha 0, extrapolated walls (the continuity default): period -7.1 %,
+//     decay 0.185 1/s = 4.7x the laminar 0.0395 1/s;
+//   the same with mirrored walls: the tank gains energy while it rests (docs/methods.md, "Wall
+//     pressure"), and the wave rides on that noise: period -27 %, decay 40x;
+//   summation, alpha 0.1 (the engine's default physics): period -6.7 %, decay 13.7x.
+// The issue's targets (period within 2 %, decay within 20 %) are not met; the test holds what is
+// measured, so that a change that adds dissipation or detunes the wave fails: the period of the
+// default continuity run within 8 %, its decay between the laminar rate and 6x it, at most half
+// of the alpha = 0.1 run's (measured 0.34) and at most a quarter of the mirrored walls' (0.12).
 TEST(StandingWave, PeriodAndDecayAgainstLinearTheory) {
     const double k = std::numbers::pi / kL, omega = std::sqrt(kG * k * std::tanh(k * kDepth));
     const double period = 2 * std::numbers::pi / omega;
     const double nu = 2e-3;
     const double decay = 2 * nu * k * k;
     std::printf("linear theory: period %.4f s, decay %.4f 1/s\n", period, decay);
-    const Wave w = run_wave(0.01, true, 0.0, nu, 3.2 * period);
-    const Wave old = run_wave(0.01, false, 0.1, 0.0, 3.2 * period);
-    std::printf("continuity + delta-SPH, alpha 0, nu %.0e: period %+.2f %%, decay %.1f x the laminar prediction\n", nu,
-                100 * (w.period / period - 1), w.decay / decay);
-    std::printf("summation, alpha 0.1: period %+.2f %%, decay %.1f x the laminar prediction of nu = %.0e\n",
-                100 * (old.period / period - 1), old.decay / decay, nu);
+    const Wave w = run_wave(0.01, true, 0.0, nu, 3.2 * period, 1.5);
+    const Wave mirrored = run_wave(0.01, true, 0.0, nu, 3.2 * period, 1.5, WallPressure::Mirrored);
+    const Wave old = run_wave(0.01, false, 0.1, 0.0, 3.2 * period, 1.5);
+    for (const Wave* x : {&w, &mirrored, &old})
+        std::printf("period %+.2f %%, decay %.2f x the laminar prediction of nu = %.0e\n", 100 * (x->period / period - 1),
+                    x->decay / decay, nu);
     ASSERT_GE(w.crossings, 5);
     ASSERT_GE(w.extrema, 5);
-    EXPECT_NEAR(w.period / period, 1.0, 0.04);
-    EXPECT_NEAR(old.period / period, 1.0, 0.04);
+    EXPECT_NEAR(w.period / period, 1.0, 0.08);
     EXPECT_GT(w.decay, decay);
-    EXPECT_LT(w.decay, 0.95 * old.decay);
+    EXPECT_LT(w.decay, 6 * decay);
+    EXPECT_LT(w.decay, 0.5 * old.decay);
+    EXPECT_LT(w.decay, 0.25 * mirrored.decay);
 }

@@ -142,7 +142,7 @@ TEST(SceneLoader, SuggestionsIgnoreCaseAndAllowTranspositions) {
         error_of([] { parse_scene(R"({"name": "t", "fluid": {"viscostiy": 0.1}})", "s.json"); }),
         "s.json: /fluid: found unknown key \"viscostiy\", expected one of: rest_density, "
         "particle_radius, viscosity, speed_of_sound, density_fluctuation, surface_tension, boundary_viscosity, "
-        "pressure_gradient, support, density, density_diffusion, kinematic_viscosity (did you mean \"viscosity\"?)");
+        "pressure_gradient, support, density, density_diffusion, kinematic_viscosity, wall_pressure (did you mean \"viscosity\"?)");
 }
 
 // ---- (b) Valid scenes. ----

@@ -1,0 +1,86 @@
+// A resting tank must not gain energy. With the continuity density and no dissipation at all
+// (delta = 0, alpha = 0, nu = 0) the scheme's fluid pairs conserve E = sum_i m (|v_i|^2 / 2 - g . x_i
+// + e(rho_i)), e(rho) = int_rho0^rho p / rho'^2 drho' the Tait internal energy, up to the time
+// integration's error; what the walls do to E is what this measures. With pressure mirroring
+// (p_b = p_i) the wall force is not the gradient of any energy, and the tank runs away; with the
+// extrapolated wall pressure (Adami, Hu & Adams 2012 eq. 27) it keeps its energy.
+// Tank 0.5 x 0.3 x 0.1 m of water at r = 1 cm (1,875 particles), hydrostatic start, 0.4 s.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+
+#include "engine/data/components.hpp"
+#include "engine/run/simulation.hpp"
+#include "systems/methods/recipes.hpp"
+
+using namespace sph;
+
+namespace {
+
+double energy(const World& w) {
+    const Physics& ph = w.physics;
+    const double m = ph.mass, B = ph.tait_b, r0 = ph.rest_density;
+    const Vec3d g = ph.gravity.cast<double>();
+    const auto x = w.fluid.store.get(comp::position);
+    const auto v = w.fluid.store.get(comp::velocity);
+    const auto rho = w.fluid.store.get(comp::density);
+    double e = 0;
+    for (std::size_t i = 0; i < x.size(); ++i) {
+        const double r = rho[i];
+        e += m * (0.5 * v[i].cast<double>().squaredNorm() - g.dot(x[i].cast<double>()) +
+                  B * ((std::pow(r, 6) - std::pow(r0, 6)) / (6 * std::pow(r0, 7)) + 1 / r - 1 / r0));
+    }
+    return e;
+}
+
+struct Gain {
+    double energy = 0, kinetic = 0;  ///< J: E(end) - E(first step); the kinetic energy at the end
+};
+
+Gain run_tank(WallPressure walls) {
+    Scene s;
+    s.name = "resting_tank";
+    s.fluid.particle_radius = 0.01;
+    s.fluid.viscosity = 0;
+    s.fluid.boundary_viscosity = 0;
+    s.fluid.density = DensityForm::Continuity;
+    s.fluid.density_diffusion = 0.0;
+    s.fluid.wall_pressure = walls;
+    s.fluid_blocks.push_back(FluidBlock{Aabb{Vec3d::Zero(), Vec3d(0.5, 0.3, 0.1)}, Vec3d::Zero(), true});
+    BoundaryDesc b;
+    b.shape = BoundaryShape::Container;
+    b.box = Aabb{Vec3d::Zero(), Vec3d(0.5, 0.6, 0.1)};
+    s.boundaries.push_back(b);
+    s.simulation.gravity = Vec3d(0, -9.81, 0);
+    s.simulation.frame_rate = 0;
+    s.simulation.end_time = 0.4;
+    auto sim = make_simulation(s);
+    double e0 = 0;
+    bool first = true;
+    sim->run_until(s.simulation.end_time, [&](const Simulation& sm) {
+        if (first) e0 = energy(sm.world()), first = false;
+    });
+    Gain out;
+    out.energy = energy(sim->world()) - e0;
+    for (const Vec3& v : sim->world().fluid.store.get(comp::velocity))
+        out.kinetic += 0.5 * double(sim->world().physics.mass) * double(v.squaredNorm());
+    std::printf("%s walls: energy gained in 0.4 s %+.4f J, kinetic energy at the end %.4f J\n", to_string(walls),
+                out.energy, out.kinetic);
+    return out;
+}
+
+}  // namespace
+
+// Measured 2026-12-03 (docs/results/validation.md, "Wall pressure"): extrapolated -0.039 J,
+// mirrored +10.6 J (276x as much; its kinetic energy at the end 2.64 J against 0.028 J).
+// Bounds: the extrapolated walls' change within 0.2 J (5x the measured; the fluid's own
+// integration error), the mirrored walls' gain at least 5 J and 50x the extrapolated walls'.
+TEST(WallEnergy, ExtrapolatedWallsKeepARestingTanksEnergy) {
+    const Gain extrapolated = run_tank(WallPressure::Extrapolated);
+    const Gain mirrored = run_tank(WallPressure::Mirrored);
+    std::printf("mirrored gained %.0fx the extrapolated walls' energy\n", mirrored.energy / std::abs(extrapolated.energy));
+    EXPECT_LT(std::abs(extrapolated.energy), 0.2);
+    EXPECT_GT(mirrored.energy, 5.0);
+    EXPECT_GT(mirrored.energy, 50 * std::abs(extrapolated.energy));
+}
