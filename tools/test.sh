@@ -48,7 +48,7 @@ stage "3/4 ThreadSanitizer: graph and system tests, against a TSan-instrumented 
 tbb_dir=$(bash tools/install_tsan_tbb.sh)
 tsan_targets=(system_graph_test individual_systems_test forces_system_test boundary_motion_system_test
               grid_test checkpoint_test extremes_test emitter_system_test pcisph_test nonpressure_forces_system_test
-              gradient_correction_system_test vectorised_paths_test dfsph_test)
+              gradient_correction_system_test vectorised_paths_test dfsph_test wall_pressure_system_test)
 # Without OpenVDB here: Debian's libopenvdb links Debian's (uninstrumented) libtbb, and no test
 # of this stage writes a surface.
 cmake -S . -B build-tsan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g" \
