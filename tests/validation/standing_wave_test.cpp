@@ -152,10 +152,10 @@ TEST(StandingWave, PeriodAndDecayAgainstLinearTheory) {
     EXPECT_LT(w.decay, 0.25 * mirrored.decay);
 }
 
-// The same wave at r = 5 mm (50 particles deep, 50,000 particles; about 10 minutes on 2 cores, so
+// The same wave at r = 5 mm (50 particles deep, 50,000 particles; 15 minutes on 2 cores, so
 // disabled in CI: run with --gtest_also_run_disabled_tests --gtest_filter=StandingWave.*). Measured
-// 2026-12-03 (a diagnostic with the same configuration and the same fit from 5 ms samples): period
-// +0.77 %, decay 0.0404 1/s = 1.02x laminar: the targets (2 %, 20 %) at this resolution.
+// 2026-12-03 (this test, 910 s): period 1.1909 s = +0.77 %, decay 0.0404 1/s = 1.02x laminar: the
+// issue's targets (2 %, 20 %) at this resolution.
 TEST(StandingWave, DISABLED_FineResolutionMeetsTheTargets) {
     const double k = std::numbers::pi / kL, omega = std::sqrt(kG * k * std::tanh(k * kDepth));
     const double period = 2 * std::numbers::pi / omega;
