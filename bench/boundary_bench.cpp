@@ -1,6 +1,9 @@
 // Boundary and per-step bookkeeping systems at 10^4, 10^5 and 10^6 fluid particles:
 //   BM_BoundaryNeighbours/<N>/<active per mille>  fluid->boundary lists (systems/neighbours),
 //                                                  all particles or a scattered active set
+//   BM_WallPressure/<N>/<active per mille>         the walls' extrapolated pressure (Adami et al. 2012):
+//                                                  every row (fixed-point scatter) or the walls a
+//                                                  scattered active set reaches (grid gather)
 //   BM_BoundaryCollision/<N>                       the wall safety net (systems/boundary)
 //   BM_BoundaryMotion/<N>                          kinematic container motion + boundary grid
 //   BM_StepStats/<N>, BM_GlobalDt/<N>,             density error, v/a max, the global step,
@@ -18,6 +21,7 @@
 #include "engine/run/probes.hpp"
 #include "systems/boundary/boundary_collision_system.hpp"
 #include "systems/boundary/boundary_motion_system.hpp"
+#include "systems/boundary/wall_pressure_system.hpp"
 #include "systems/integrate/symplectic_euler_system.hpp"
 #include "systems/methods/recipes.hpp"
 #include "systems/metrics/step_stats_system.hpp"
@@ -98,6 +102,25 @@ static void BM_BoundaryNeighbours(benchmark::State& state) {
     state.counters["boundary_neighbours_per_particle"] = double(w.boundary_neighbours.total()) / double(w.fluid.size());
 }
 BENCHMARK(BM_BoundaryNeighbours)->ArgsProduct({{10'000, 100'000, 1'000'000}, {1000, 500, 100, 10}})
+    ->Unit(benchmark::kMillisecond)->UseRealTime();
+
+static void BM_WallPressure(benchmark::State& state) {
+    auto sim = tank(std::size_t(state.range(0)), false);
+    World& w = sim->world();
+    const bool individual = state.range(1) < 1000;
+    w.active_set.clear();
+    for (std::size_t i = 0; i < w.fluid.size(); ++i)
+        if ((i * 2654435761u) % 1000u < std::size_t(state.range(1))) w.active_set.push_back(Index(i));
+    WallPressureSystem system(individual);
+    system.register_components(w);
+    for (auto _ : state) {
+        run_system(system, w);
+        benchmark::ClobberMemory();
+    }
+    counters(state, w, individual ? double(w.active_set.size()) : double(w.fluid.size()));
+    state.counters["active_fraction"] = individual ? double(w.active_set.size()) / double(w.fluid.size()) : 1.0;
+}
+BENCHMARK(BM_WallPressure)->ArgsProduct({{10'000, 100'000, 1'000'000}, {1000, 500, 100, 10}})
     ->Unit(benchmark::kMillisecond)->UseRealTime();
 
 static void BM_BoundaryCollision(benchmark::State& state) { bench_system(state, [](const Scene& s) { return BoundaryCollisionSystem(s.boundaries, false); }); }
