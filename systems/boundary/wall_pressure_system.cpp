@@ -49,8 +49,17 @@ void WallPressureSystem::run(Context& ctx) {
         pb[b] = pressure;
         rhob[b] = rho0 * std::pow(pressure / b_eos + Real(1), Real(1) / Real(7));
     };
+    // One pair's terms of eq. 27: the weight W_bf / sigma and (p_f + rho_f g . (x_b - x_f)) times it.
+    auto weight = [&](Real r2) { return kernel.w(std::sqrt(r2)) * inv_sigma; };
+    auto term = [&](Index f, const Vec3& at, Real w) { return (p[f] + rho[f] * g.dot(at - x[f])) * w; };
+    // A boundary row is claimed once per step (an atomic byte) by the worker that lists it first.
     m_mark.resize(xb.size(), 0);
     for (auto& part : m_found) part.clear();
+    auto claim = [&](Index b, std::vector<Index>& mine) {
+        std::atomic_ref<std::uint8_t> mark(m_mark[b]);
+        if (mark.load(std::memory_order_relaxed) == 0 && mark.exchange(1, std::memory_order_relaxed) == 0)
+            mine.push_back(b);
+    };
 
     if (!active) {
         // Every fluid row is evaluated, so the fluid rows' boundary lists hold every pair within h:
@@ -64,14 +73,11 @@ void WallPressureSystem::run(Context& ctx) {
             std::vector<Index>& mine = m_found.local();
             for (std::size_t i = r.begin(); i < r.end(); ++i)
                 for (Index b : lists.of(Index(i))) {
-                    // Every listed row is claimed and written, whatever its distance: forces read them all.
-                    std::atomic_ref<std::uint8_t> mark(m_mark[b]);
-                    if (mark.load(std::memory_order_relaxed) == 0 && mark.exchange(1, std::memory_order_relaxed) == 0)
-                        mine.push_back(b);
+                    claim(b, mine);  // every listed row is written, whatever its distance: forces read them all
                     const Real r2 = (xb[b] - x[i]).squaredNorm();
                     if (r2 >= h2) continue;
-                    const Real w = kernel.w(std::sqrt(r2)) * inv_sigma;
-                    const Real t = (p[i] + rho[i] * g.dot(xb[b] - x[i])) * w;
+                    const Real w = weight(r2);
+                    const Real t = term(Index(i), xb[b], w);
                     std::atomic_ref<std::int64_t>(m_num[b]).fetch_add(std::llround(double(t) * kNum), std::memory_order_relaxed);
                     std::atomic_ref<std::int64_t>(m_den[b]).fetch_add(std::llround(double(w) * kDen), std::memory_order_relaxed);
                 }
@@ -88,14 +94,12 @@ void WallPressureSystem::run(Context& ctx) {
         return;
     }
 
-    // Per-particle modes: the rows in the active rows' lists (each claimed once by an atomic byte,
-    // then sorted), each summed over the fluid grid, since a sleeping row's list is not current.
+    // Per-particle modes: the rows in the active rows' lists (claimed, then sorted), each summed over
+    // the fluid grid, since a sleeping row's list is not current.
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, active->size(), 512), [&](const auto& r) {
         std::vector<Index>& mine = m_found.local();
         for (std::size_t k = r.begin(); k < r.end(); ++k)
-            for (Index b : lists.of((*active)[k]))
-                if (std::atomic_ref<std::uint8_t>(m_mark[b]).exchange(1, std::memory_order_relaxed) == 0)
-                    mine.push_back(b);
+            for (Index b : lists.of((*active)[k])) claim(b, mine);
     });
     m_rows.clear();
     for (const std::vector<Index>& part : m_found) m_rows.insert(m_rows.end(), part.begin(), part.end());
@@ -109,8 +113,8 @@ void WallPressureSystem::run(Context& ctx) {
             grid.for_each_candidate(at, x, [&](Index f, const Vec3& xf) {
                 const Real r2 = (at - xf).squaredNorm();
                 if (r2 >= h2) return;
-                const Real w = kernel.w(std::sqrt(r2)) * inv_sigma;  // W_bf / sigma
-                num += (p[f] + rho[f] * g.dot(at - xf)) * w;
+                const Real w = weight(r2);
+                num += term(f, at, w);
                 den += w;
             });
             finish(b, num, den);
