@@ -12,10 +12,21 @@
 
 namespace sph::test {
 
-/// A fluid block in a closed container, no motion: r = 0.01 m unless given.
+/// He et al.'s physics (summation density, Monaghan alpha 0.1, no laminar viscosity, mirrored
+/// walls), which the system and stepping tests built on these scenes were written and measured
+/// against; the engine's own defaults (continuity, alpha 0.01, water's nu) are a scene's when it
+/// sets none (SceneDefaults tests).
+inline void he_physics(Scene& s) {
+    s.fluid.density = DensityForm::Summation;
+    s.fluid.viscosity = 0.1;
+    s.fluid.kinematic_viscosity = 0.0;
+}
+
+/// A fluid block in a closed container, no motion, He et al.'s physics: r = 0.01 m unless given.
 inline Scene tank_scene(Vec3d fluid_max, Vec3d box_max, double r = 0.01) {
     Scene s;
     s.name = "test_tank";
+    he_physics(s);
     s.fluid.particle_radius = r;
     s.fluid_blocks.push_back(FluidBlock{Aabb{Vec3d::Zero(), fluid_max}, Vec3d::Zero(), /*hydrostatic=*/false});
     BoundaryDesc b;

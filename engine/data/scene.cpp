@@ -180,9 +180,24 @@ BoundaryDesc translated(const BoundaryDesc& b, const Vec3d& d) {
     return out;
 }
 
+DensityForm density_form(const Scene& scene) {
+    if (scene.fluid.density) return *scene.fluid.density;
+    return scene.simulation.method == Method::Wcsph ? DensityForm::Continuity : DensityForm::Summation;
+}
+
+double artificial_viscosity(const Scene& scene) {
+    if (scene.fluid.viscosity) return *scene.fluid.viscosity;
+    return density_form(scene) == DensityForm::Continuity ? 0.01 : 0.1;
+}
+
+double kinematic_viscosity(const Scene& scene) {
+    if (scene.fluid.kinematic_viscosity) return *scene.fluid.kinematic_viscosity;
+    return scene.simulation.method == Method::Wcsph ? 1e-6 : 0.0;
+}
+
 WallPressure wall_pressure(const Scene& scene) {
     if (scene.fluid.wall_pressure) return *scene.fluid.wall_pressure;
-    return scene.fluid.density == DensityForm::Continuity ? WallPressure::Extrapolated : WallPressure::Mirrored;
+    return density_form(scene) == DensityForm::Continuity ? WallPressure::Extrapolated : WallPressure::Mirrored;
 }
 
 bool has_moving_boundaries(const Scene& scene) {

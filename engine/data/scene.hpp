@@ -142,7 +142,9 @@ struct FluidParams {
     /// Kernel support radius h in particle spacings (default 2: h = 4 r, as He et al.). A larger
     /// support lowers the kernel-sum error at a cost of about support^3 neighbours per particle.
     double support = 2.0;
-    double viscosity = 0.1;           ///< Monaghan artificial viscosity alpha (dimensionless).
+    /// Monaghan artificial viscosity alpha (dimensionless). Unset: artificial_viscosity(scene),
+    /// 0.01 with the continuity density (stable with delta-SPH, docs/methods.md), else 0.1.
+    std::optional<double> viscosity;
     std::optional<double> speed_of_sound;  ///< m/s; default from density_fluctuation.
     double density_fluctuation = 0.01;     ///< target |rho/rho0 - 1| for the default c_s.
     /// Becker & Teschner 2007 eq. 13 cohesion coefficient kappa (m^3/s^2):
@@ -154,13 +156,15 @@ struct FluidParams {
     /// WCSPH only: `corrected` for hydrostatic accuracy (docs/results/validation.md), at the cost of one
     /// more pass over the neighbours per step.
     PressureGradient pressure_gradient = PressureGradient::Symmetric;
-    /// WCSPH only: how the density evolves (DensityForm).
-    DensityForm density = DensityForm::Summation;
+    /// WCSPH only: how the density evolves (DensityForm). Unset: density_form(scene), `continuity`
+    /// for WCSPH, `summation` (their own solvers' density) for PCISPH and DFSPH.
+    std::optional<DensityForm> density;
     /// delta of the delta-SPH diffusion term with `density: continuity` (Molteni & Colagrossi 2009
     /// eq. 8; 0.1 as in the literature and DualSPHysics); 0 turns it off. Unset: 0.1.
     std::optional<double> density_diffusion;
     /// Kinematic viscosity nu (m^2/s) of the laminar term of Morris et al. 1997 (WCSPH; 0: none).
-    double kinematic_viscosity = 0.0;
+    /// Unset: kinematic_viscosity(scene), water's 1e-6 for WCSPH, 0 for PCISPH and DFSPH.
+    std::optional<double> kinematic_viscosity;
     /// WCSPH only: the boundary particles' pressure (WallPressure). Unset: `extrapolated` with the
     /// continuity density, `mirrored` with the summation density.
     std::optional<WallPressure> wall_pressure;
@@ -303,6 +307,19 @@ struct Scene {
     /// @brief Particle radius after `scale`.
     double particle_radius() const;
 };
+
+/// @brief The density form a scene runs with: fluid.density, or unset `continuity` for WCSPH (with
+/// delta-SPH, which makes low artificial viscosity usable) and `summation` for PCISPH and DFSPH.
+DensityForm density_form(const Scene& scene);
+
+/// @brief The Monaghan alpha a scene runs with: fluid.viscosity, or unset 0.01 with the continuity
+/// density (DualSPHysics' value; with delta-SPH and extrapolated walls the dam break needs no
+/// more, docs/results/validation.md) and 0.1 otherwise (He et al.'s scenes).
+double artificial_viscosity(const Scene& scene);
+
+/// @brief The laminar kinematic viscosity a scene runs with: fluid.kinematic_viscosity, or unset
+/// water's 1e-6 m^2/s for WCSPH and 0 for PCISPH and DFSPH (which have no laminar term).
+double kinematic_viscosity(const Scene& scene);
 
 /// @brief The wall pressure a WCSPH scene runs with: fluid.wall_pressure, or unset `extrapolated`
 /// with the continuity density and `mirrored` with the summation density.

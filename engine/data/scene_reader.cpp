@@ -235,12 +235,12 @@ class Reader {
                     "\"wcsph\" only (PCISPH and DFSPH have their own pressure solvers)",
                     {"/fluid/pressure_gradient", "/simulation/method"});
         }
-        if (s.fluid.density == DensityForm::Continuity && !wcsph) {
+        if (s.fluid.density == DensityForm::Continuity && !wcsph) {  // set, not defaulted
             fail_at("/fluid/density", dump_at("/fluid/density"),
                     "\"summation\" or no key: the continuity density is implemented for method \"wcsph\" only",
                     {"/fluid/density", "/simulation/method"});
         }
-        if (s.fluid.density_diffusion && s.fluid.density != DensityForm::Continuity) {
+        if (s.fluid.density_diffusion && density_form(s) != DensityForm::Continuity) {
             fail_at("/fluid/density_diffusion", dump_at("/fluid/density_diffusion"),
                     "no key unless fluid.density is \"continuity\": the summation density is recomputed at every "
                     "evaluation and has nothing to diffuse",
@@ -252,7 +252,7 @@ class Reader {
                     "boundary particles their own pressure)",
                     {"/fluid/wall_pressure", "/simulation/method"});
         }
-        if (s.fluid.kinematic_viscosity > 0 && !wcsph) {
+        if (s.fluid.kinematic_viscosity.value_or(0) > 0 && !wcsph) {
             fail_at("/fluid/kinematic_viscosity", dump_at("/fluid/kinematic_viscosity"),
                     "0 or no key: the laminar viscosity (Morris et al. 1997) is implemented for method \"wcsph\" only",
                     {"/fluid/kinematic_viscosity", "/simulation/method"});
@@ -321,6 +321,9 @@ class Reader {
     }
 
     void read_number(const Node& obj, const char* key, const Range& range, double& out) const {
+        if (const json* v = obj.find(key)) out = number(obj.at(*v, key), range);
+    }
+    void read_number(const Node& obj, const char* key, const Range& range, std::optional<double>& out) const {
         if (const json* v = obj.find(key)) out = number(obj.at(*v, key), range);
     }
     /// A time the clock converts to ticks: positive, then within what the timeline holds.

@@ -73,13 +73,13 @@ void derive_constants(World& w, const Scene& scene) {
     ph.spacing = Real(2 * r);
     ph.h = Real(scene.fluid.support * 2 * r);  // 4 r by default (He et al.)
     ph.rest_density = Real(scene.fluid.rest_density);
-    ph.viscosity = Real(scene.fluid.viscosity);
-    ph.boundary_viscosity = Real(scene.fluid.boundary_viscosity.value_or(scene.fluid.viscosity));
+    ph.viscosity = Real(artificial_viscosity(scene));
+    ph.boundary_viscosity = Real(scene.fluid.boundary_viscosity.value_or(artificial_viscosity(scene)));
     ph.gravity = scene.simulation.gravity.cast<Real>();
-    ph.continuity = scene.fluid.density == DensityForm::Continuity;
+    ph.continuity = density_form(scene) == DensityForm::Continuity;
     ph.extrapolated_wall_pressure = scene.simulation.method == Method::Wcsph && wall_pressure(scene) == WallPressure::Extrapolated;
     ph.density_diffusion = ph.continuity ? Real(scene.fluid.density_diffusion.value_or(0.1)) : Real(0);
-    ph.kinematic_viscosity = Real(scene.fluid.kinematic_viscosity);
+    ph.kinematic_viscosity = Real(kinematic_viscosity(scene));
 #ifdef SPH_DOUBLE
     ph.simd = false;  // the vectorised loops are float-only
 #else

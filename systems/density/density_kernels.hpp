@@ -17,6 +17,17 @@ inline Real tait_pressure(Real rho, Real rho0, Real b) {
     return b * (x4 * x2 * x - Real(1));
 }
 
+/// @brief The lowest density the continuity density may integrate to: rho0 (1 - 0.01).
+/// A splash thinning out (div v > 0) would otherwise keep its density deficit and reach a wall
+/// with no pressure to stop it, so the integrated density is floored near rho0. Not at rho0
+/// itself: a floor at rho0 clips the lower half of the density's oscillation about rho0 at rest,
+/// a ratchet that raises the mean density of a resting free-surface layer and lifts it
+/// (`individual` tank, 200 Pa of noise: surface +4.9 mm, pressure -3.2 % at 0.1 m depth). One
+/// percent is the compressibility the sound speed is chosen for (c_s >= 10 v_max, Monaghan
+/// 1994), forty times the relative density noise of that tank, so a resting layer never reaches
+/// it while a separated droplet is compressed at most 1 % before it pushes back.
+inline Real continuity_density_floor(Real rho0) { return rho0 * Real(0.99); }
+
 /// @brief The drho_i/dt of the continuity density (`fluid.density: continuity`):
 ///   D_i = sum_j m_j v_ij . grad W_ij + sum_b psi_b v_ib . grad W_ib           (He et al. eq. 5)
 ///       + delta h_s c_s sum_j (m_j / rho_j) 2 (rho_ij - rho^H_ij) (x_ij . grad W_ij) / (r^2 + 0.01 h^2),

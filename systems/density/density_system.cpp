@@ -133,6 +133,7 @@ void DensitySystem::run_continuity(Context& ctx) {
     const Real m = ph.mass, rho0 = ph.rest_density, c = ph.speed_of_sound, h = ph.h;
     const Real diffusion = ph.density_diffusion * h * c, eps_h2 = Real(0.01) * h * h;
     const Vec3 g_h = (rho0 / (c * c)) * ph.gravity;  // rho^H_ij = g_h . x_ij
+    const Real floor_rho = continuity_density_floor(rho0);
     // A row without a density (0) starts from its summation, at least rho0; its D_i is then
     // still computed (the slope of individual stepping's interpolation) but not applied.
     auto start = [&](Index i) {
@@ -213,7 +214,7 @@ void DensitySystem::run_continuity(Context& ctx) {
         });
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 2048), [&](const auto& r) {
             for (std::size_t i = r.begin(); i < r.end(); ++i) {
-                if (!std::isnan(p[i])) rho[i] = std::max(rho[i] + dt * drho[i], rho0);
+                if (!std::isnan(p[i])) rho[i] = std::max(rho[i] + dt * drho[i], floor_rho);
                 p[i] = tait_pressure(rho[i], rho0, ph.tait_b);
             }
         });
@@ -239,7 +240,7 @@ void DensitySystem::run_continuity(Context& ctx) {
         rates(active.data(), r.begin(), r.end());
         for (std::size_t k = r.begin(); k < r.end(); ++k) {
             const Index i = active[k];
-            next[k] = next[k] < 0 ? rho[i] : std::max(rho_last[i] + Real(to_seconds(now - t_last[i])) * drho[i], rho0);
+            next[k] = next[k] < 0 ? rho[i] : std::max(rho_last[i] + Real(to_seconds(now - t_last[i])) * drho[i], floor_rho);
         }
     });
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, active.size(), 1024), [&](const auto& r) {

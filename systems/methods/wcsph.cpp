@@ -47,7 +47,7 @@ Recipe make_wcsph_recipe(const Scene& scene) {
     // binned reads only the active particles' lists: compact, the others emptied.
     r.step.push_back(std::make_unique<FluidNeighbourSystem>(individual, !binned));
     if (boundary) r.step.push_back(std::make_unique<BoundaryNeighbourSystem>(individual, !binned));
-    const bool continuity = scene.fluid.density == DensityForm::Continuity;
+    const bool continuity = density_form(scene) == DensityForm::Continuity;
     r.step.push_back(std::make_unique<DensitySystem>(boundary, individual, continuity, moving));
     // The walls' pressure from the fluid around them (Adami et al. 2012), once the fluid's is known.
     const bool extrapolated = boundary && wall_pressure(scene) == WallPressure::Extrapolated;

@@ -84,10 +84,13 @@ void check_tank(const std::string& mode, bool continuity);
 
 TEST_P(HydrostaticTank, PressureMatchesRhoGDepth) { check_tank(GetParam(), false); }
 
-// The continuity density with delta-SPH (docs/methods.md), same scene and tolerances; measured
-// 2026-12-03 (depths 0.1 / 0.2 / 0.3 m): global -0.58 / +0.31 / +0.90 % with 4.4-10.5 Pa of
-// noise, individual -1.83 / -1.31 / -0.49 % with 183-193 Pa, binned -0.40 / +0.37 / +0.86 %
-// with 4.2-7.4 Pa.
+// The continuity density with delta-SPH (docs/methods.md), same scene and tolerances, extrapolated
+// walls (its default); measured 2026-12-04 (depths 0.1 / 0.2 / 0.3 m): global -0.65 / -0.34 /
+// -0.26 % with 0.5-5.4 Pa of noise, individual +0.37 / -0.61 / -0.31 % with 186-194 Pa (surface
+// 0.3993 m), binned -0.89 / -0.23 / -0.19 % with 0.7-6.5 Pa. With the density floored at rho0
+// itself, `individual` read -3.24 / -2.61 / -2.10 % (surface 0.4049 m): the floor clipped the
+// lower half of its resting noise and lifted the column (density_kernels.hpp,
+// continuity_density_floor).
 class HydrostaticTankContinuity : public ::testing::TestWithParam<std::string> {};
 TEST_P(HydrostaticTankContinuity, PressureMatchesRhoGDepthWithLessNoise) { check_tank(GetParam(), true); }
 INSTANTIATE_TEST_SUITE_P(PerStepMode, HydrostaticTankContinuity, ::testing::Values("global", "individual", "binned"),

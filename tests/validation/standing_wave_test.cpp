@@ -113,19 +113,20 @@ Wave run_wave(double r, bool continuity, double alpha, double nu, double end, do
 
 }  // namespace
 
-// What it measures (2026-12-03, r = 1 cm: 25 particles deep, 100 per wavelength; each run first
-// rests 1.5 s, then the wave's velocity field is imposed):
+// What it measures (2026-12-04, r = 1 cm: 25 particles deep, 100 per wavelength; each run first
+// rests 1.5 s, then the wave's velocity field is imposed; continuity density floored at 0.99 rho0):
 //   continuity + delta-SPH, alpha 0, extrapolated walls, corrected pressure gradient: period
-//     +2.2 %, decay 0.0437 1/s = 1.11x the laminar 0.0395 1/s;
-//   the same with the symmetric gradient (He eq. 4): period -6.7 %, decay 4.3x;
+//     +1.84 %, decay 0.0437 1/s = 1.11x the laminar 0.0395 1/s;
+//   the same with the symmetric gradient (He eq. 4): period -7.2 %, decay 4.3x;
 //   and with mirrored walls as well: the tank gains energy while it rests (docs/methods.md, "Wall
-//     pressure"), and the wave rides on that noise: period -27 %, decay 40x;
-//   summation, alpha 0.1 (the engine's default physics): period -6.7 %, decay 13.7x.
-// Tolerances: the corrected run's period within 3 % (the issue asks 2 %; measured +2.2 %) and its
-// decay within 20 % of the laminar rate (the issue's; measured +11 %); the symmetric runs hold what
-// is measured, so that a change that adds dissipation or detunes the wave fails: period within
-// 8 %, the extrapolated walls' decay at most 6x laminar, half the alpha = 0.1 run's (measured 0.31)
-// and a quarter of the mirrored walls' (0.11).
+//     pressure"), and the wave rides on that noise: period -2.9 %, decay 10.7x (-27 % and 40x
+//     when the density was floored at rho0 itself);
+//   summation, alpha 0.1 (He et al.'s physics): period -6.7 %, decay 13.7x.
+// Tolerances: the corrected run's period within 3 % (the issue asks 2 %; measured +1.8 to +2.2 %
+// across floor changes) and its decay within 20 % of the laminar rate (the issue's; measured
+// +11 %); the symmetric runs hold what is measured, so that a change that adds dissipation or
+// detunes the wave fails: period within 8 %, the extrapolated walls' decay at most 6x laminar,
+// half the alpha = 0.1 run's (measured 0.31) and half the mirrored walls' (0.40).
 TEST(StandingWave, PeriodAndDecayAgainstLinearTheory) {
     const double k = std::numbers::pi / kL, omega = std::sqrt(kG * k * std::tanh(k * kDepth));
     const double period = 2 * std::numbers::pi / omega;
@@ -149,7 +150,7 @@ TEST(StandingWave, PeriodAndDecayAgainstLinearTheory) {
     EXPECT_GT(w.decay, decay);
     EXPECT_LT(w.decay, 6 * decay);
     EXPECT_LT(w.decay, 0.5 * old.decay);
-    EXPECT_LT(w.decay, 0.25 * mirrored.decay);
+    EXPECT_LT(w.decay, 0.5 * mirrored.decay);
 }
 
 // The same wave at r = 5 mm (50 particles deep, 50,000 particles; 15 minutes on 2 cores, so

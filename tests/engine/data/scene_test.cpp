@@ -14,6 +14,8 @@
 #include "engine/core/errors.hpp"
 #include "engine/data/scene.hpp"
 #include "engine/data/components.hpp"
+#include "engine/data/world.hpp"
+#include "engine/data/world_init.hpp"
 #include "systems/methods/recipes.hpp"
 
 namespace sph {
@@ -197,7 +199,7 @@ TEST(SceneLoader, CompleteSceneParsesEveryField) {
 
     EXPECT_DOUBLE_EQ(s.fluid.rest_density, 998.2);
     EXPECT_DOUBLE_EQ(s.fluid.particle_radius, 0.02);
-    EXPECT_DOUBLE_EQ(s.fluid.viscosity, 0.0);
+    EXPECT_EQ(s.fluid.viscosity, 0.0);
     ASSERT_TRUE(s.fluid.speed_of_sound.has_value());
     EXPECT_DOUBLE_EQ(*s.fluid.speed_of_sound, 40.0);
     EXPECT_DOUBLE_EQ(s.fluid.density_fluctuation, 0.02);
@@ -435,6 +437,48 @@ TEST(SceneLoader, ParseOverrideFeedsLoad) {
                                  parse_override("fluid.particle_radius=0.02")});
     EXPECT_EQ(s.simulation.stepping.mode, SteppingMode::Constant);
     EXPECT_DOUBLE_EQ(s.fluid.particle_radius, 0.02);
+}
+
+// ---- Physics defaults (issue 16): a WCSPH scene that sets no physics runs the continuity
+// density with delta-SPH, alpha 0.01, water's nu and extrapolated walls; PCISPH and DFSPH keep
+// their own density and alpha 0.1. Set keys win. ----
+
+TEST(SceneDefaults, WcsphRunsTheContinuityDensityWithLowAlphaAndWatersViscosity) {
+    const char* const text = R"({"name": "t", "fluid_blocks": [{"min": [0, 0, 0], "max": [0.1, 0.1, 0.1]}]})";
+    const Scene s = parse_scene(text, "t.json");
+    EXPECT_FALSE(s.fluid.density.has_value());
+    EXPECT_EQ(density_form(s), DensityForm::Continuity);
+    EXPECT_EQ(artificial_viscosity(s), 0.01);
+    EXPECT_EQ(kinematic_viscosity(s), 1e-6);
+    EXPECT_EQ(wall_pressure(s), WallPressure::Extrapolated);
+    World w;
+    initialise_world(w, s);
+    EXPECT_TRUE(w.physics.continuity);
+    EXPECT_EQ(w.physics.density_diffusion, Real(0.1));
+    EXPECT_EQ(w.physics.viscosity, Real(0.01));
+    EXPECT_EQ(w.physics.boundary_viscosity, Real(0.01));
+    EXPECT_EQ(w.physics.kinematic_viscosity, Real(1e-6));
+    EXPECT_TRUE(w.physics.extrapolated_wall_pressure);
+}
+
+TEST(SceneDefaults, SummationKeepsHesAlphaAndSetKeysWin) {
+    const Scene summation = parse_scene(
+        R"({"name": "t", "fluid": {"density": "summation"}, "fluid_blocks": [{"min": [0, 0, 0], "max": [0.1, 0.1, 0.1]}]})", "t.json");
+    EXPECT_EQ(artificial_viscosity(summation), 0.1);
+    EXPECT_EQ(kinematic_viscosity(summation), 1e-6);
+    EXPECT_EQ(wall_pressure(summation), WallPressure::Mirrored);
+    const Scene set = parse_scene(R"({"name": "t", "fluid": {"viscosity": 0.05, "kinematic_viscosity": 0},
+                                      "fluid_blocks": [{"min": [0, 0, 0], "max": [0.1, 0.1, 0.1]}]})", "t.json");
+    EXPECT_EQ(density_form(set), DensityForm::Continuity);
+    EXPECT_EQ(artificial_viscosity(set), 0.05);
+    EXPECT_EQ(kinematic_viscosity(set), 0.0);
+    for (const char* method : {"pcisph", "dfsph"}) {
+        const Scene other = parse_scene(R"({"name": "t", "fluid_blocks": [{"min": [0, 0, 0], "max": [0.1, 0.1, 0.1]}]})", "t.json",
+                                        {{"/simulation/method", method}});
+        EXPECT_EQ(density_form(other), DensityForm::Summation) << method;
+        EXPECT_EQ(artificial_viscosity(other), 0.1) << method;
+        EXPECT_EQ(kinematic_viscosity(other), 0.0) << method;
+    }
 }
 
 // ---- Scale and names. ----
