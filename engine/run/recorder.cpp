@@ -20,18 +20,20 @@
 #include "engine/core/errors.hpp"
 #include "engine/graph/system.hpp"
 #include "engine/run/io.hpp"
+#include "engine/run/probes.hpp"
 #include "engine/run/surface.hpp"
 
 namespace sph {
 
 double front_x(const World& w) {
-    // The largest x of a fluid particle with at least 4 fluid neighbours (so a lone droplet
-    // thrown ahead is not the front), in metres; 0 without such a particle.
-    const auto x = w.fluid.store.get(comp::position);
-    double front = -std::numeric_limits<double>::infinity();
-    for (std::size_t i = 0; i < x.size(); ++i)
-        if (i < w.fluid_neighbours.rows() && w.fluid_neighbours.size_of(Index(i)) >= 4)
-            front = std::max(front, double(x[i].x()));
+    // The largest x of a fluid particle with at least 4 fluid neighbours within h (so a lone
+    // droplet thrown ahead is not the front), in metres; 0 without such a particle. Counted on a
+    // grid built here, not read from the neighbour lists: `individual` and `binned` keep lists
+    // only for the rows they evaluated last, so a sleeping front row has none (the summary's
+    // front read 0 m in a binned run). A whole-fluid pass at frame times and at the end.
+    UniformGrid grid(w.domain, w.physics.h);
+    grid.build(w.fluid.store.get(comp::position));
+    const double front = front_by_neighbours(w, grid, Vec3d(1, 0, 0), 4);
     return std::isfinite(front) ? front : 0.0;
 }
 

@@ -109,6 +109,17 @@ TEST(Probes, FrontByNeighboursIgnoresALoneDroplet) {
     EXPECT_NEAR(front_by_neighbours(w, g, {1, 0, 0}, 0), 0.35, 1e-6);
 }
 
+// The summary's front (recorder.hpp, front_x) is the same front by neighbours along +x, counted from
+// the positions: a state with no neighbour lists (no step taken, as for a sleeping row in
+// `individual` or `binned`) still has its front at the last layer's centres, 0.2 - r.
+TEST(Probes, SummaryFrontNeedsNoNeighbourLists) {
+    auto sim = block_at_rest();
+    World& w = sim->world();
+    w.fluid.store.get(comp::position)[0] = Vec3(0.35f, 0.05f, 0.1f);  // a lone droplet ahead
+    ASSERT_EQ(w.fluid_neighbours.rows(), 0u);
+    EXPECT_NEAR(front_x(w), 0.2 - w.physics.particle_radius, 1e-6);
+}
+
 // A block moving at v = (1, -2, 0.5) m/s: KE = M |v|^2 / 2, momentum M v, potential energy
 // M g y_com with y_com = 0.15 m (the block's centre), M = N m. Relative tolerance 1e-6
 // (float positions and velocities summed in double).
