@@ -62,7 +62,8 @@ from sph_python import need  # noqa: E402
 need("numpy")
 import numpy as np  # noqa: E402
 
-TOP_KEYS = {"name", "description", "simulation", "domain", "fluid", "fluid_blocks", "boundaries", "output", "probes"}
+TOP_KEYS = {"name", "description", "simulation", "domain", "fluid", "fluid_blocks", "boundaries", "output",
+            "pcisph", "dfsph", "boundary", "emitters", "probes", "standing_wave"}  # engine/data/scene_detail.hpp k_top_keys
 HERE = pathlib.Path(__file__).resolve().parent
 
 
@@ -345,6 +346,53 @@ def experiment_error(run_dir, probe, scene_dir):
     return shifted_error(T, Z, te, ze, e.get("t_range", [-1e300, 1e300]), e.get("max_shift", 0.0))
 
 
+def wave_figures(run_dir, fluid_probe, summary, scene_json):
+    """A scene with a `standing_wave`: the period and amplitude decay of the fluid's centre of
+    mass after the wave is given (zero crossings of centre_x about its resting value; slope of
+    ln |extremum| against time, parabola-refined extrema), beside linear theory from the run's
+    summary.json (Lamb 1932 sec. 348; tests/validation/standing_wave_test.cpp reads it the same
+    way). Mode 1 moves the centre of mass most; even modes do not move it (returns None)."""
+    wave = summary.get("standing_wave")
+    f = pathlib.Path(run_dir) / "probes" / f"{fluid_probe}.csv"
+    if not wave or wave["mode"] % 2 == 0 or not f.is_file():
+        return None
+    d = read_csv(f)
+    if "centre_x" not in d:
+        return None
+    t, x = d["t"], d["centre_x"]
+    at = wave["at"]
+    before = (t < at) & (t >= at - 0.2)
+    if before.any():
+        rest = float(np.mean(x[before]))
+    else:
+        box = scene_json["fluid_blocks"][0]
+        rest = 0.5 * (box["min"][0] + box["max"][0])
+    keep = t > at
+    t, x = t[keep] - at, x[keep] - rest
+    zeros = [t[i - 1] + (t[i] - t[i - 1]) * x[i - 1] / (x[i - 1] - x[i])
+             for i in range(1, len(t)) if (x[i - 1] < 0) != (x[i] < 0)]
+    ext_t, ext_v, i0 = [], [], 0
+    for z in range(len(zeros) + 1):
+        t_end = zeros[z] if z < len(zeros) else t[-1] + 1
+        idx = [i for i in range(i0, len(t)) if t[i] < t_end]
+        if idx:
+            best = max(idx, key=lambda i: abs(x[i]))
+            i0 = idx[-1] + 1
+            if 0 < best < len(t) - 1 and z < len(zeros):  # an interior extremum, its half-cycle closed
+                y0, y1, y2 = abs(x[best - 1]), abs(x[best]), abs(x[best + 1])
+                den = y0 - 2 * y1 + y2
+                off = 0.5 * (y0 - y2) / den if den != 0 else 0.0
+                ext_t.append(t[best] + off * (t[best + 1] - t[best]))
+                ext_v.append(y1 - 0.25 * (y0 - y2) * off)
+    out = {"period_theory_s": wave["period_theory_s"], "decay_theory_per_s": wave["decay_theory_per_s"],
+           "period_s": float("nan"), "decay_per_s": float("nan"), "crossings": len(zeros), "extrema": len(ext_t)}
+    if len(zeros) >= 3:
+        out["period_s"] = 2 * (zeros[-1] - zeros[0]) / (len(zeros) - 1)
+    if len(ext_t) >= 3:
+        out["decay_per_s"] = -float(np.polyfit(ext_t, np.log(ext_v), 1)[0])
+    return out
+
+
 def pareto_front(points):
     """Indices of the non-dominated points (smaller wall time and smaller error are better)."""
     front = []
@@ -435,6 +483,14 @@ def main():
             err, shift = experiment_error(r["_dir"], p, scene_dir)
             row[f"exp err {p['name']} %"] = 100 * err
             row[f"exp shift {p['name']}"] = shift
+        wave = wave_figures(r["_dir"], study.fluid_probe, r, study.scene_json)
+        if wave:
+            row["wave period s"] = wave["period_s"]
+            row["wave period err %"] = 100 * (wave["period_s"] / wave["period_theory_s"] - 1)
+            row["wave decay 1/s"] = wave["decay_per_s"]
+            row["wave decay / theory"] = wave["decay_per_s"] / wave["decay_theory_per_s"] \
+                if wave["decay_theory_per_s"] > 0 else float("nan")
+            row["wave theory"] = f"T {wave['period_theory_s']:.4f} s, decay {wave['decay_theory_per_s']:.4g} 1/s"
         rows.append(row)
 
     # ---- tables ----
@@ -459,6 +515,9 @@ def main():
            "speed-up vs global", "vs constant", "ρ err avg / max %"] + \
           [k.replace("dev ", "RMS dev ") for k in dev_cols] + ["dev (mean rel.)"] + \
           [k.replace("exp err ", "exp. err ") + " (ΔT)" for k in exp_cols]
+    wave_cols = "wave period s" in columns
+    if wave_cols:
+        hdr += ["wave period s (err %)", "decay 1/s (× theory)"]
     lines = [head, "", "| " + " | ".join(hdr) + " |", "|" + "---|" * len(hdr)]
     for row in rows:
         if row["status"] != "ok":
@@ -470,8 +529,15 @@ def main():
                  f"{row['avg_density_error_pct']:.2f} / {row['max_density_error_pct']:.1f}"]
         cells += [fmt(row.get(k)) for k in dev_cols] + [fmt(row["deviation (mean rel.)"])]
         cells += [f"{row[k]:.1f} ({row[k.replace('exp err ', 'exp shift ').replace(' %', '')]:+.2f})" for k in exp_cols]
+        if wave_cols:
+            cells += [f"{row['wave period s']:.4f} ({row['wave period err %']:+.2f})" if "wave period s" in row else "",
+                      f"{row['wave decay 1/s']:.4f} ({row['wave decay / theory']:.2f})" if "wave period s" in row else ""]
         lines.append("| " + " | ".join(cells) + " |")
     notes = [f"* {c['label']}: {c['note']}" for c in configs if c.get("note")]
+    theory = next((row["wave theory"] for row in rows if "wave theory" in row), None)
+    if theory:
+        notes.append(f"* standing wave, linear theory: {theory} (ν of the first run; each row's ratio uses its own); measured from the fluid "
+                     f"probe's centre_x after the wave is given")
     text = "\n".join(lines + ([""] + notes if notes else [])) + "\n"
     (study.out / "study.md").write_text(text)
     print()

@@ -200,6 +200,34 @@ WallPressure wall_pressure(const Scene& scene) {
     return density_form(scene) == DensityForm::Continuity ? WallPressure::Extrapolated : WallPressure::Mirrored;
 }
 
+namespace {
+struct WaveShape {
+    double k = 0, omega = 0, depth = 0;
+    Vec3d origin = Vec3d::Zero();
+};
+WaveShape wave_shape(const Scene& scene) {
+    const Aabb& box = scene.fluid_blocks.front().box;
+    WaveShape w;
+    w.k = scene.standing_wave->mode * std::numbers::pi / (box.max.x() - box.min.x());
+    w.depth = box.max.y() - box.min.y();
+    w.omega = std::sqrt(scene.simulation.gravity.norm() * w.k * std::tanh(w.k * w.depth));
+    w.origin = box.min;
+    return w;
+}
+}  // namespace
+
+WaveTheory standing_wave_theory(const Scene& scene) {
+    const WaveShape w = wave_shape(scene);
+    return {2 * std::numbers::pi / w.omega, 2 * kinematic_viscosity(scene) * w.k * w.k};
+}
+
+Vec3d standing_wave_velocity(const Scene& scene, const Vec3d& x) {
+    const WaveShape w = wave_shape(scene);
+    const Vec3d p = x - w.origin;
+    const double u0 = scene.standing_wave->amplitude * w.omega / std::sinh(w.k * w.depth);
+    return {-u0 * std::cosh(w.k * p.y()) * std::sin(w.k * p.x()), u0 * std::sinh(w.k * p.y()) * std::cos(w.k * p.x()), 0.0};
+}
+
 bool has_moving_boundaries(const Scene& scene) {
     return std::any_of(scene.boundaries.begin(), scene.boundaries.end(),
                        [](const BoundaryDesc& b) { return b.motion.has_value(); });

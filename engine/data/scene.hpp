@@ -170,6 +170,20 @@ struct FluidParams {
     std::optional<WallPressure> wall_pressure;
 };
 
+/// @brief A linear standing wave (sloshing mode n) given to the fluid of a one-block WCSPH scene
+/// at time `at` (Lamb 1932 sec. 348; ../shared/validation/analytical_references.md): with x', y'
+/// measured from the block's min corner, L its length along x, d its depth along y (gravity
+/// along -y), k = n pi / L and omega^2 = |g| k tanh(k d), the velocity of
+/// eta = a0 sin(omega t) cos(k x') at t = 0,
+///   u = a0 omega (-cosh(k y') sin(k x'), sinh(k y') cos(k x'), 0) / sinh(k d).
+/// `at` > 0 lets the tank come to rest first (the lattice is not the discrete equilibrium, and
+/// its settling carries as much energy as a small wave); it needs `global` or `constant`.
+struct StandingWaveDesc {
+    double amplitude = 0.0;  ///< a0, m
+    int mode = 1;            ///< n >= 1
+    double at = 0.0;         ///< s
+};
+
 /// @brief A block of fluid particles on a cubic lattice of spacing 2 r, filling [min, max].
 struct FluidBlock {
     Aabb box;
@@ -303,6 +317,7 @@ struct Scene {
     DfsphParams dfsph;        ///< method "dfsph" only
     BoundaryParams boundary;  ///< method "pcisph" only
     std::vector<ProbeDesc> probes;  ///< measurements written as CSV series (engine/probes.hpp)
+    std::optional<StandingWaveDesc> standing_wave;  ///< method "wcsph", one fluid block
 
     /// @brief Particle radius after `scale`.
     double particle_radius() const;
@@ -324,6 +339,15 @@ double kinematic_viscosity(const Scene& scene);
 /// @brief The wall pressure a WCSPH scene runs with: fluid.wall_pressure, or unset `extrapolated`
 /// with the continuity density and `mirrored` with the summation density.
 WallPressure wall_pressure(const Scene& scene);
+
+/// @brief The standing wave's linear period 2 pi / omega and amplitude decay rate 2 nu k^2 under
+/// the laminar viscosity nu (the dissipation of the irrotational flow; Lamb 1932 sec. 348).
+struct WaveTheory {
+    double period = 0, decay = 0;
+};
+WaveTheory standing_wave_theory(const Scene& scene);
+/// @brief The standing wave's velocity at x (StandingWaveDesc).
+Vec3d standing_wave_velocity(const Scene& scene, const Vec3d& x);
 
 /// @brief True when any boundary of the scene has a motion.
 bool has_moving_boundaries(const Scene& scene);

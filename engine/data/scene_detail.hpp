@@ -20,9 +20,11 @@ using json = nlohmann::json;
 
 // ---- Vocabulary: keys per section (in the order they are listed in messages) and names. ----
 
-inline constexpr std::array<const char*, 13> k_top_keys{"name",  "description",  "simulation", "domain",
+inline constexpr std::array<const char*, 14> k_top_keys{"name",  "description",  "simulation", "domain",
                                                  "fluid", "fluid_blocks", "boundaries", "output",
-                                                 "pcisph", "dfsph", "boundary", "emitters", "probes"};
+                                                 "pcisph", "dfsph", "boundary", "emitters", "probes",
+                                                 "standing_wave"};
+inline constexpr std::array<const char*, 3> k_wave_keys{"amplitude", "mode", "at"};
 inline constexpr std::array<const char*, 7> k_emitter_keys{"position", "velocity", "radius", "rate", "start", "end",
                                                     "max_particles"};
 inline constexpr std::array<const char*, 6> k_pcisph_keys{"iterations", "max_iterations", "loop",

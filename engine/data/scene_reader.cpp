@@ -258,6 +258,7 @@ class Reader {
                     {"/fluid/kinematic_viscosity", "/simulation/method"});
         }
         if (const json* v = root.find("probes")) s.probes = parse_probes(*v, m_file);  // engine/probes.cpp
+        if (const json* v = root.find("standing_wave")) s.standing_wave = read_wave(root.at(*v, "standing_wave"), s);
 
         cross_check(s);
         return s;
@@ -544,6 +545,37 @@ class Reader {
                         {mp, child(n.path, lo)});
             }
         }
+    }
+
+    StandingWaveDesc read_wave(const Node& n, const Scene& s) const {
+        require_object(n, "an object with amplitude, mode and at");
+        check_keys(n, k_wave_keys);
+        StandingWaveDesc w;
+        w.amplitude = required_number(n, "amplitude", positive("metres"));
+        read_integer(n, "mode", 1, 64, w.mode);
+        read_number(n, "at", non_negative("seconds: when the wave is given to the fluid"), w.at);
+        if (s.simulation.method != Method::Wcsph)
+            fail_at(n.path, dump_at(n.path), "no standing_wave: it is given to the fluid of method \"wcsph\" only",
+                    {n.path, "/simulation/method"});
+        if (s.fluid_blocks.size() != 1)
+            fail_at(n.path, dump_at(n.path), "exactly one fluid block, whose box the wave fills (found " +
+                    std::to_string(s.fluid_blocks.size()) + ")", {n.path, "/fluid_blocks"});
+        const Vec3d g = s.simulation.gravity;
+        if (!(g.y() < 0 && g.x() == 0 && g.z() == 0))
+            fail_at(n.path, dump_at(n.path), "gravity along -y (the wave's depth is the block's height)",
+                    {n.path, "/simulation/gravity"});
+        const Aabb& box = s.fluid_blocks.front().box;
+        if (!(w.amplitude < 0.25 * (box.max.y() - box.min.y())))
+            fail(child(n.path, "amplitude"), dump_at(child(n.path, "amplitude")),
+                 "a linear wave: below a quarter of the block's depth " + fmt_num(box.max.y() - box.min.y()) + " m");
+        const SteppingMode mode = s.simulation.stepping.mode;
+        if (w.at > 0 && mode != SteppingMode::Global && mode != SteppingMode::Constant)
+            fail_at(child(n.path, "at"), dump_at(child(n.path, "at")),
+                    "0 or no key in stepping mode \"" + std::string(to_string(mode)) +
+                        "\": a wave given after the start is set between two steps, which the per-particle modes "
+                        "do not share (use \"global\" or \"constant\")",
+                    {child(n.path, "at"), "/simulation/stepping/mode"});
+        return w;
     }
 
     EmitterDesc read_emitter(const Node& n) const {

@@ -204,6 +204,7 @@ FluidTotals fluid_totals(const World& w) {
                 a.kinetic += 0.5 * m * vi.squaredNorm();
                 a.potential -= m * g.dot(x[i].template cast<double>());
                 a.momentum += m * vi;
+                a.centre += x[i].template cast<double>();
                 const double e = std::max(0.0, double(rho[i]) / rho0 - 1.0);
                 a.rho_err_avg += e;
                 a.rho_err_max = std::max(a.rho_err_max, e);
@@ -214,11 +215,15 @@ FluidTotals fluid_totals(const World& w) {
             a.kinetic += b.kinetic;
             a.potential += b.potential;
             a.momentum += b.momentum;
+            a.centre += b.centre;
             a.rho_err_avg += b.rho_err_avg;
             a.rho_err_max = std::max(a.rho_err_max, b.rho_err_max);
             return a;
         });
-    if (!x.empty()) t.rho_err_avg /= double(x.size());
+    if (!x.empty()) {
+        t.rho_err_avg /= double(x.size());
+        t.centre /= double(x.size());
+    }
     return t;
 }
 
@@ -300,7 +305,8 @@ ProbeSet::ProbeSet(const std::vector<ProbeDesc>& probes) : m_probes(probes), m_t
                 break;
             case ProbeType::Fluid:
                 s.columns = {"t", "kinetic", "potential", "momentum_x", "momentum_y", "momentum_z", "rho_err_avg",
-                             "rho_err_max", "rho_err_avg_interior", "rho_err_max_interior", "interior_count"};
+                             "rho_err_max", "rho_err_avg_interior", "rho_err_max_interior", "interior_count",
+                             "centre_x", "centre_y", "centre_z"};
                 break;
         }
         m_series.push_back(std::move(s));
@@ -357,7 +363,7 @@ void ProbeSet::sample(std::size_t k, const World& w, const UniformGrid& grid) {
             const InteriorDensityError in = interior_density_error(w);
             row.insert(row.end(), {t.kinetic, t.potential, t.momentum.x(), t.momentum.y(), t.momentum.z(),
                                    t.rho_err_avg, t.rho_err_max, in.rho_err_avg, in.rho_err_max,
-                                   double(in.count)});
+                                   double(in.count), t.centre.x(), t.centre.y(), t.centre.z()});
             break;
         }
     }

@@ -66,11 +66,13 @@ double column_height(const World& w, const UniformGrid& grid, const Vec3d& from,
 double front_by_neighbours(const World& w, const UniformGrid& grid, const Vec3d& dir, int k);
 
 /// @brief Whole-fluid quantities (SI): kinetic 1/2 sum m v^2, potential -sum m g . x (zero at
-/// the origin), momentum sum m v, and the density error max(rho/rho0 - 1, 0) (as in stats.csv)
-/// averaged and maximised over the fluid.
+/// the origin), momentum sum m v, the centre of mass (1/N) sum x (a sloshing wave's surface
+/// moves it: scenes/standing_wave.json), and the density error max(rho/rho0 - 1, 0) (as in
+/// stats.csv) averaged and maximised over the fluid.
 struct FluidTotals {
     double kinetic = 0, potential = 0;
     Vec3d momentum = Vec3d::Zero();
+    Vec3d centre = Vec3d::Zero();
     double rho_err_avg = 0, rho_err_max = 0;
 };
 FluidTotals fluid_totals(const World& w);

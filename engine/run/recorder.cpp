@@ -425,6 +425,13 @@ nlohmann::json Recorder::finish(const Simulation& sim, double wall_seconds, int 
                     {"density_diffusion", w.physics.density_diffusion},
                     {"kinematic_viscosity", w.physics.kinematic_viscosity},
                     {"wall_pressure", w.physics.extrapolated_wall_pressure ? "extrapolated" : "mirrored"}};
+    if (const auto& wave = w.scene.standing_wave) {
+        // Linear theory for the wave the scene gives (engine/data/scene.hpp standing_wave_theory):
+        // what sph-study compares the measured period and decay with.
+        const WaveTheory th = standing_wave_theory(w.scene);
+        j["standing_wave"] = {{"amplitude", wave->amplitude}, {"mode", wave->mode}, {"at", wave->at},
+                              {"period_theory_s", th.period}, {"decay_theory_per_s", th.decay}};
+    }
     j["frames"] = m_frame;
     if (m_surface_frames > 0) {
         // The surface's cost per frame, also in steps of this run (an average step's time in

@@ -26,6 +26,7 @@ Simulation::Simulation(const Scene& scene, Recipe recipe) {
     m_rollback_steps = recipe.rollback_steps;
     if (m_rollback_steps > 0) m_ring = std::make_unique<StateRing>(m_rollback_steps);
     m_graph->set_after_system([this](std::size_t i) { trace_non_finite(i); });
+    give_wave_if_due();  // a wave at 0 is in the first frame
 }
 
 namespace {
@@ -164,6 +165,24 @@ std::string Simulation::step_size_owner() const {
 }
 
 bool Simulation::run_until(double end_time, const std::function<void(const Simulation&)>& after_step) {
+    const auto& wave = m_world.scene.standing_wave;
+    if (wave && !m_wave_given && end_time >= wave->at && m_world.clock.t < wave->at && !advance(wave->at, after_step))
+        return false;
+    give_wave_if_due();
+    return advance(end_time, after_step);
+}
+
+void Simulation::give_wave_if_due() {
+    const auto& wave = m_world.scene.standing_wave;
+    if (!wave || m_wave_given || m_world.clock.t_ticks != to_ticks(wave->at + 0.5 * kSecondsPerTick)) return;
+    const auto x = m_world.fluid.store.get(comp::position);
+    auto v = m_world.fluid.store.get(comp::velocity);
+    for (std::size_t i = 0; i < x.size(); ++i)
+        v[i] = standing_wave_velocity(m_world.scene, x[i].cast<double>()).cast<Real>();
+    m_wave_given = true;
+}
+
+bool Simulation::advance(double end_time, const std::function<void(const Simulation&)>& after_step) {
     // The end in whole ticks (rounded to the nearest): the step-size systems clip the last step
     // to land on it exactly, so round-off never adds a sliver step at the end.
     m_world.clock.t_stop = end_time;

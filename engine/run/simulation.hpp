@@ -44,7 +44,8 @@ public:
     /// domain or a step below dt_min, naming the particle, the step and the system.
     void step();
     /// @brief Steps until `end_time` (the scene's by default), calling `after_step` each step.
-    /// Returns false when it stopped earlier because request_stop() was called.
+    /// Returns false when it stopped earlier because request_stop() was called. A scene's
+    /// standing wave is given to the fluid when the clock reads its `at` (the run is split there).
     bool run_until(double end_time, const std::function<void(const Simulation&)>& after_step = {});
     /// @brief Makes run_until return after the step in progress (safe from another thread or
     /// a signal handler's flag check; the state stays consistent, ready to be written).
@@ -65,6 +66,11 @@ public:
 
 private:
     std::atomic<bool> m_stop{false};
+    bool m_wave_given = false;
+    /// run_until without the standing wave's split.
+    bool advance(double end_time, const std::function<void(const Simulation&)>& after_step);
+    /// Sets the fluid's velocity to the scene's standing wave if the clock reads its `at`.
+    void give_wave_if_due();
     void check_step();
     void spatial_sort();
     /// Scans the fluid columns system i writes for non-finite values (NaN, inf) and keeps

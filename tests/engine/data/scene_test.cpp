@@ -7,6 +7,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <numbers>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -16,6 +17,7 @@
 #include "engine/data/components.hpp"
 #include "engine/data/world.hpp"
 #include "engine/data/world_init.hpp"
+#include "engine/run/simulation.hpp"
 #include "systems/methods/recipes.hpp"
 
 namespace sph {
@@ -479,6 +481,76 @@ TEST(SceneDefaults, SummationKeepsHesAlphaAndSetKeysWin) {
         EXPECT_EQ(artificial_viscosity(other), 0.1) << method;
         EXPECT_EQ(kinematic_viscosity(other), 0.0) << method;
     }
+}
+
+// ---- The standing wave (scenes/standing_wave.json). ----
+
+// Linear theory for the shipped tank, by hand: k = pi / 1 m, d = 0.5 m, omega^2 = 9.81 k tanh(k d)
+// = 28.266 1/s^2, period 2 pi / omega = 1.18181 s; decay 2 nu k^2 = 2 (2e-3) pi^2 = 0.0394784 1/s.
+// The velocity field: divergence-free (central differences, step 1e-4 m: truncation ~1e-8 of
+// u0 k, tolerance 1e-6 of it), no flow through the walls x = 0, x = L and the floor (1e-12 m/s),
+// and at the surface the vertical velocity d eta / dt = a0 omega cos(k x) of the wave's start.
+TEST(StandingWaveKey, TheoryAndVelocityOfTheShippedTank) {
+    const Scene s = load_scene(fs::path(SPH_SOURCE_DIR) / "scenes" / "standing_wave.json");
+    ASSERT_TRUE(s.standing_wave.has_value());
+    const WaveTheory th = standing_wave_theory(s);
+    EXPECT_NEAR(th.period, 1.18181, 1e-5);
+    EXPECT_NEAR(th.decay, 0.0394784, 1e-7);
+    const double k = std::numbers::pi, omega = 2 * std::numbers::pi / th.period, a0 = 0.02;
+    const double u0k = a0 * omega / std::sinh(0.5 * k) * k, e = 1e-4;
+    for (const double x : {0.1, 0.37, 0.5, 0.81})
+        for (const double y : {0.05, 0.25, 0.45}) {
+            const Vec3d p(x, y, 0.05);
+            const double div = (standing_wave_velocity(s, p + Vec3d(e, 0, 0)).x() - standing_wave_velocity(s, p - Vec3d(e, 0, 0)).x() +
+                                standing_wave_velocity(s, p + Vec3d(0, e, 0)).y() - standing_wave_velocity(s, p - Vec3d(0, e, 0)).y()) / (2 * e);
+            EXPECT_NEAR(div, 0.0, 1e-6 * u0k) << x << ", " << y;
+            EXPECT_EQ(standing_wave_velocity(s, p).z(), 0.0);
+        }
+    for (const double y : {0.0, 0.2, 0.5}) {
+        EXPECT_NEAR(standing_wave_velocity(s, Vec3d(0, y, 0.05)).x(), 0.0, 1e-12);
+        EXPECT_NEAR(standing_wave_velocity(s, Vec3d(1, y, 0.05)).x(), 0.0, 1e-12);
+    }
+    for (const double x : {0.0, 0.3, 1.0}) {
+        EXPECT_NEAR(standing_wave_velocity(s, Vec3d(x, 0, 0.05)).y(), 0.0, 1e-12);
+        EXPECT_NEAR(standing_wave_velocity(s, Vec3d(x, 0.5, 0.05)).y(), a0 * omega * std::cos(k * x), 1e-12);
+    }
+}
+
+// The wave is given between two steps when the clock reads `at`: a run that passes through
+// `at` in one call lands a step on it, leaves the fluid exactly the wave's velocity there, and
+// ends bit for bit where a run split at `at` by its caller ends (100 particles, 2 threads).
+TEST(StandingWaveKey, GivenOnceWhenTheClockReadsAt) {
+    const char* const text = R"({"name": "t", "simulation": {"stepping": {"mode": "global"}},
+        "fluid": {"particle_radius": 0.01},
+        "fluid_blocks": [{"min": [0, 0, 0], "max": [0.2, 0.1, 0.04]}],
+        "boundaries": [{"type": "container", "min": [0, 0, 0], "max": [0.2, 0.2, 0.04]}],
+        "standing_wave": {"amplitude": 0.005, "at": 0.01}})";
+    const Scene s = parse_scene(text, "t.json");
+    auto split = make_simulation(s);
+    split->run_until(0.01);
+    {
+        const World& w = split->world();
+        ASSERT_EQ(w.fluid.size(), 100u);
+        const auto x = w.fluid.store.get(comp::position);
+        const auto v = w.fluid.store.get(comp::velocity);
+        for (std::size_t i = 0; i < x.size(); ++i)
+            EXPECT_EQ(v[i], standing_wave_velocity(s, x[i].cast<double>()).cast<Real>()) << "particle " << i;
+    }
+    split->run_until(0.02);
+    auto whole = make_simulation(s);
+    bool landed = false;
+    whole->run_until(0.02, [&](const Simulation& sm) { landed |= sm.world().clock.t_ticks == to_ticks(0.01 + 0.5 * kSecondsPerTick); });
+    EXPECT_TRUE(landed);
+    const auto a = split->world().fluid.store.get(comp::position);
+    const auto b = whole->world().fluid.store.get(comp::position);
+    ASSERT_EQ(a.size(), b.size());
+    for (std::size_t i = 0; i < a.size(); ++i) EXPECT_EQ(a[i], b[i]) << "particle " << i;
+    // And not again: the velocities moved on from the field (the wave is 5 mm, gravity acts 10 ms).
+    const auto v = whole->world().fluid.store.get(comp::velocity);
+    const auto x = whole->world().fluid.store.get(comp::position);
+    double off = 0;
+    for (std::size_t i = 0; i < x.size(); ++i) off = std::max(off, (v[i].cast<double>() - standing_wave_velocity(s, x[i].cast<double>())).norm());
+    EXPECT_GT(off, 1e-4);
 }
 
 // ---- Scale and names. ----

@@ -121,7 +121,8 @@ TEST(Probes, SummaryFrontNeedsNoNeighbourLists) {
 }
 
 // A block moving at v = (1, -2, 0.5) m/s: KE = M |v|^2 / 2, momentum M v, potential energy
-// M g y_com with y_com = 0.15 m (the block's centre), M = N m. Relative tolerance 1e-6
+// M g y_com with y_com = 0.15 m (the block's centre; the centre of mass also against the mean
+// of the positions, 1e-9 m: the same doubles summed in another order), M = N m. Relative tolerance 1e-6
 // (float positions and velocities summed in double).
 TEST(Probes, FluidTotalsOfAUniformlyMovingBlock) {
     auto sim = block_at_rest();
@@ -138,6 +139,10 @@ TEST(Probes, FluidTotalsOfAUniformlyMovingBlock) {
     EXPECT_NEAR(t.potential, mass * 9.81 * 0.15, 1e-6 * t.potential);
     EXPECT_NEAR(t.rho_err_max, 0.05, 1e-6);
     EXPECT_NEAR(t.rho_err_avg, 0.05 / n, 1e-8);
+    Vec3d centre = Vec3d::Zero();  // brute force, in order
+    for (const Vec3& x : w.fluid.store.get(comp::position)) centre += x.cast<double>() / n;
+    EXPECT_NEAR((t.centre - centre).norm(), 0.0, 1e-9);
+    EXPECT_NEAR(t.centre.y(), 0.15, 1e-6);
 }
 
 // The interior density error (Ihmsen sec. 4.1 comparison) against brute force over every
@@ -255,7 +260,7 @@ TEST(Probes, RatesAndCsvFromARun) {
     };
     EXPECT_EQ(lines("fluid_0.csv"), std::make_pair(std::string("t,kinetic,potential,momentum_x,momentum_y,momentum_z,"
                                                                "rho_err_avg,rho_err_max,rho_err_avg_interior,"
-                                                               "rho_err_max_interior,interior_count"), 11));
+                                                               "rho_err_max_interior,interior_count,centre_x,centre_y,centre_z"), 11));
     EXPECT_EQ(lines("tip.csv"), std::make_pair(std::string("t,front,x_centre"), 3));
     EXPECT_EQ(lines("height_2.csv").second, 3);
     EXPECT_EQ(lines("pressure_3.csv").first, "t,p,colour");
