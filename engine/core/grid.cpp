@@ -198,12 +198,60 @@ Index filter(const CandidateCache& cache, const Vec3& xi, Index self, Real r2, I
     return simd ? filter_candidates_simd(cache, xi, self, r2, dst) : filter_scalar(cache, xi, self, r2, dst);
 }
 
-/// The cache of the query's cell, refilled when the query moved to another cell.
-CandidateCache& cache_for(const UniformGrid& grid, std::span<const Vec3> grid_positions, CandidateCache& cache,
-                          const Vec3& xi) {
+/// The scalar form of filter_ranges_simd: the candidates of `ranges` read from the grid's
+/// slot-ordered coordinates, branch-free as filter_scalar.
+Index filter_ranges_scalar(const UniformGrid& grid, const CandidateRanges& ranges, const Vec3& xi, Index self, Real r2,
+                           Index* dst) {
+    const Real *sx = grid.sorted_x(), *sy = grid.sorted_y(), *sz = grid.sorted_z();
+    const Index* sj = grid.sorted_index().data();
+    Index c = 0;
+    for (int r = 0; r < ranges.count; ++r)
+        for (std::size_t k = ranges.begin[r]; k < ranges.end[r]; ++k) {
+            const Index j = sj[k];
+            dst[c] = j;
+            c += Index((xi - Vec3(sx[k], sy[k], sz[k])).squaredNorm() < r2) & Index(j != self);
+        }
+    return c;
+}
+
+/// Where one query's candidates are read from: its cell's cache, or the grid's slot-ordered
+/// coordinates directly (`direct`, the 9 ranges in `ranges`).
+struct QuerySource {
+    bool direct = false;
+    CandidateRanges ranges;
+    std::size_t count = 0;  ///< candidates
+};
+
+/// `next_cell` for a build of every list, whose consecutive rows share cells.
+constexpr std::int64_t kAlwaysCache = -2;
+
+/// Picks the source of query xi. A cache fill copies every candidate once, as much as one filter
+/// pass: it pays when the cache already holds the query's cell or the next query (`next_cell`,
+/// -1 for none) shares it. A subset build (binned and individual stepping) whose due particles
+/// are scattered meets most cells once, and then reads the grid's own coordinates instead
+/// (grids that keep them; the lists are the same, in the same order).
+
+QuerySource source_for(const UniformGrid& grid, std::span<const Vec3> grid_positions, CandidateCache& cache,
+                       const Vec3& xi, std::int64_t next_cell) {
+    QuerySource q;
     const std::int64_t cell = grid.cell_of(xi);
+    if (next_cell != kAlwaysCache && cell != cache.cell && next_cell != cell && grid.sorted_x() != nullptr) {
+        q.direct = true;
+        q.ranges = grid.candidate_ranges(xi);
+        q.count = q.ranges.total;
+        return q;
+    }
     if (cell != cache.cell) cache.fill(grid, grid_positions, xi, cell);
-    return cache;
+    q.count = cache.count;
+    return q;
+}
+
+/// The list of query xi from the source source_for picked.
+Index filter(const UniformGrid& grid, const CandidateCache& cache, const QuerySource& q, const Vec3& xi, Index self,
+             Real r2, Index* dst, bool simd) {
+    if (!q.direct) return filter(cache, xi, self, r2, dst, simd);
+    if (q.count == 0) return 0;
+    return simd ? filter_ranges_simd(grid, q.ranges, xi, self, r2, dst) : filter_ranges_scalar(grid, q.ranges, xi, self, r2, dst);
 }
 
 /// Every list (or the subset's), back to back per block of query particles, written straight
@@ -258,17 +306,19 @@ void build_compact(const UniformGrid& grid, std::span<const Vec3> grid_positions
                 }
                 ++k;
                 const Vec3 xi = query_positions[i];
-                cache_for(grid, grid_positions, cache, xi);
+                const std::int64_t next_cell = every ? kAlwaysCache
+                                               : k < k_end ? grid.cell_of(query_positions[rows[k]]) : -1;
+                const QuerySource src = source_for(grid, grid_positions, cache, xi, next_cell);
                 // Room for every candidate plus a vector of slack (the vectorised filter's
                 // whole-vector stores, and the readers' whole-vector loads).
-                const std::size_t need = used + cache.count + NeighbourLists::kSlack;
+                const std::size_t need = used + src.count + NeighbourLists::kSlack;
                 peak = std::max(peak, need);
                 if (buf.size() < need) {  // grows by a 32nd over the need: a block's lists change little per step
                     std::vector<Index> grown(need + need / 32);
                     std::copy_n(buf.data(), used, grown.data());
                     buf.swap(grown);
                 }
-                used += filter(cache, xi, exclude_self ? Index(i) : kNoSelf, r2, buf.data() + used, simd);
+                used += filter(grid, cache, src, xi, exclude_self ? Index(i) : kNoSelf, r2, buf.data() + used, simd);
                 lists.end[i] = Index(used);
             }
             // A block holding more than a 16th above what this build needed at its peak gives
@@ -326,10 +376,11 @@ void build_slab(const UniformGrid& grid, std::span<const Vec3> grid_positions,
             for (std::size_t q = r.begin(); q < r.end(); ++q) {
                 const Index i = subset.all ? Index(q) : subset.indices[q];
                 const Vec3 xi = query_positions[i];
-                cache_for(grid, grid_positions, cache, xi);
-                if (found.size() < cache.count + NeighbourLists::kSlack)
-                    found.resize(2 * cache.count + NeighbourLists::kSlack);
-                const Index c = filter(cache, xi, exclude_self ? i : kNoSelf, r2, found.data(), simd);
+                const std::int64_t next_cell = subset.all ? kAlwaysCache
+                                               : q + 1 < r.end() ? grid.cell_of(query_positions[subset.indices[q + 1]]) : -1;
+                const QuerySource src = source_for(grid, grid_positions, cache, xi, next_cell);
+                if (found.size() < src.count + NeighbourLists::kSlack) found.resize(2 * src.count + NeighbourLists::kSlack);
+                const Index c = filter(grid, cache, src, xi, exclude_self ? i : kNoSelf, r2, found.data(), simd);
                 std::copy_n(found.data(), std::min(c, cap), lists.indices.data() + std::size_t(i) * cap);
                 lists.count[i] = c;
                 local_max = std::max(local_max, c);

@@ -42,8 +42,38 @@ Index FilterCandidates(const CandidateCache& cache, const Vec3& xi, Index self, 
     }
     return c;
 }
+Index FilterRanges(const UniformGrid& grid, const CandidateRanges& ranges, const Vec3& xi, Index self, float r2,
+                   Index* dst) {
+    const hn::ScalableTag<float> d;
+    const hn::RebindToUnsigned<decltype(d)> du;
+    const std::size_t lanes = hn::Lanes(d);
+    const auto vx = hn::Set(d, xi.x()), vy = hn::Set(d, xi.y()), vz = hn::Set(d, xi.z());
+    const auto vr2 = hn::Set(d, r2);
+    const auto vself = hn::Set(du, self);
+    const float *sx = grid.sorted_x(), *sy = grid.sorted_y(), *sz = grid.sorted_z();
+    const Index* sj = grid.sorted_index().data();
+    Index c = 0;
+    for (int r = 0; r < ranges.count; ++r) {
+        const std::size_t e = ranges.end[r];
+        // A load past a range's end reads the next range's slots or the grid's padding
+        // (UniformGrid::kPadding readable slots after the last): masked off.
+        for (std::size_t k = ranges.begin[r]; k < e; k += lanes) {
+            const auto dx = hn::Sub(vx, hn::LoadU(d, sx + k));
+            const auto dy = hn::Sub(vy, hn::LoadU(d, sy + k));
+            const auto dz = hn::Sub(vz, hn::LoadU(d, sz + k));
+            const auto dist2 = hn::MulAdd(dz, dz, hn::MulAdd(dy, dy, hn::Mul(dx, dx)));
+            const auto j = hn::LoadU(du, sj + k);
+            const auto in = hn::And(hn::And(hn::RebindMask(du, hn::Lt(dist2, vr2)), hn::Ne(j, vself)),
+                                    hn::FirstN(du, e - k));
+            hn::StoreU(hn::Compress(j, in), du, dst + c);
+            c += Index(hn::CountTrue(du, in));
+        }
+    }
+    return c;
+}
 #else
 Index FilterCandidates(const CandidateCache&, const Vec3&, Index, Real, Index*) { return 0; }
+Index FilterRanges(const UniformGrid&, const CandidateRanges&, const Vec3&, Index, Real, Index*) { return 0; }
 #endif
 
 }  // namespace HWY_NAMESPACE
@@ -56,6 +86,11 @@ HWY_EXPORT(FilterCandidates);
 
 Index filter_candidates_simd(const CandidateCache& cache, const Vec3& xi, Index self, Real r2, Index* dst) {
     return HWY_DYNAMIC_DISPATCH(FilterCandidates)(cache, xi, self, r2, dst);
+}
+HWY_EXPORT(FilterRanges);
+Index filter_ranges_simd(const UniformGrid& grid, const CandidateRanges& ranges, const Vec3& xi, Index self, Real r2,
+                         Index* dst) {
+    return HWY_DYNAMIC_DISPATCH(FilterRanges)(grid, ranges, xi, self, r2, dst);
 }
 
 }  // namespace sph
