@@ -231,10 +231,10 @@ constexpr std::int64_t kAlwaysCache = -2;
 /// are scattered meets most cells once, and then reads the grid's own coordinates instead
 /// (grids that keep them; the lists are the same, in the same order).
 
+/// `cell` is the query's own (grid.cell_of(xi)).
 QuerySource source_for(const UniformGrid& grid, std::span<const Vec3> grid_positions, CandidateCache& cache,
-                       const Vec3& xi, std::int64_t next_cell) {
+                       const Vec3& xi, std::int64_t cell, std::int64_t next_cell) {
     QuerySource q;
-    const std::int64_t cell = grid.cell_of(xi);
     if (next_cell != kAlwaysCache && cell != cache.cell && next_cell != cell && grid.sorted_x() != nullptr) {
         q.direct = true;
         q.ranges = grid.candidate_ranges(xi);
@@ -299,6 +299,7 @@ void build_compact(const UniformGrid& grid, std::span<const Vec3> grid_positions
             const std::size_t k_end = every ? 0 : first[job + 1];
             std::vector<Index>& buf = lists.blocks[b];
             std::size_t used = 0, peak = NeighbourLists::kSlack;
+            std::int64_t known = -1;  // the next query's cell when it was looked ahead (-1: not)
             for (std::size_t i = b * B; i < row_end; ++i) {
                 if (!every && !(k < k_end && rows[k] == i)) {  // not queried: empty
                     lists.end[i] = Index(used);
@@ -306,9 +307,12 @@ void build_compact(const UniformGrid& grid, std::span<const Vec3> grid_positions
                 }
                 ++k;
                 const Vec3 xi = query_positions[i];
+                // Each query's cell is computed once: the look-ahead's is kept for the next.
+                const std::int64_t cell = known >= 0 ? known : grid.cell_of(xi);
                 const std::int64_t next_cell = every ? kAlwaysCache
                                                : k < k_end ? grid.cell_of(query_positions[rows[k]]) : -1;
-                const QuerySource src = source_for(grid, grid_positions, cache, xi, next_cell);
+                known = every ? -1 : next_cell;
+                const QuerySource src = source_for(grid, grid_positions, cache, xi, cell, next_cell);
                 // Room for every candidate plus a vector of slack (the vectorised filter's
                 // whole-vector stores, and the readers' whole-vector loads).
                 const std::size_t need = used + src.count + NeighbourLists::kSlack;
@@ -373,12 +377,15 @@ void build_slab(const UniformGrid& grid, std::span<const Vec3> grid_positions,
             Index local_max = 0;
             std::vector<Index>& found = scratch.local();
             CandidateCache& cache = caches.local();
+            std::int64_t known = -1;  // the next query's cell when it was looked ahead (-1: not)
             for (std::size_t q = r.begin(); q < r.end(); ++q) {
                 const Index i = subset.all ? Index(q) : subset.indices[q];
                 const Vec3 xi = query_positions[i];
+                const std::int64_t cell = known >= 0 ? known : grid.cell_of(xi);
                 const std::int64_t next_cell = subset.all ? kAlwaysCache
                                                : q + 1 < r.end() ? grid.cell_of(query_positions[subset.indices[q + 1]]) : -1;
-                const QuerySource src = source_for(grid, grid_positions, cache, xi, next_cell);
+                known = subset.all ? -1 : next_cell;
+                const QuerySource src = source_for(grid, grid_positions, cache, xi, cell, next_cell);
                 if (found.size() < src.count + NeighbourLists::kSlack) found.resize(2 * src.count + NeighbourLists::kSlack);
                 const Index c = filter(grid, cache, src, xi, exclude_self ? i : kNoSelf, r2, found.data(), simd);
                 std::copy_n(found.data(), std::min(c, cap), lists.indices.data() + std::size_t(i) * cap);
