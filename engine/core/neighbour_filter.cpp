@@ -19,22 +19,26 @@ namespace HWY_NAMESPACE {
 namespace hn = hwy::HWY_NAMESPACE;
 
 #ifndef SPH_DOUBLE
-Index FilterCandidates(const CandidateCache& cache, const Vec3& xi, Index self, float r2, Index* dst) {
+/// Filters slots [begin, end) of slot-ordered arrays x, y, z, j against xi, appending the indices
+/// in range to dst + c; returns the new count. Masked: the last vector's lanes past `end` are
+/// masked off (they may hold real candidates); otherwise they must hold far points.
+template <bool Masked>
+Index FilterRun(const float* x, const float* y, const float* z, const Index* jx, std::size_t begin, std::size_t end,
+                const Vec3& xi, Index self, float r2, Index* dst, Index c) {
     const hn::ScalableTag<float> d;
     const hn::RebindToUnsigned<decltype(d)> du;
     const std::size_t lanes = hn::Lanes(d);
     const auto vx = hn::Set(d, xi.x()), vy = hn::Set(d, xi.y()), vz = hn::Set(d, xi.z());
     const auto vr2 = hn::Set(d, r2);
     const auto vself = hn::Set(du, self);
-    Index c = 0;
-    // The padding past cache.count holds far points, which fail the distance test.
-    for (std::size_t k = 0; k < cache.count; k += lanes) {
-        const auto dx = hn::Sub(vx, hn::LoadU(d, cache.x.data() + k));
-        const auto dy = hn::Sub(vy, hn::LoadU(d, cache.y.data() + k));
-        const auto dz = hn::Sub(vz, hn::LoadU(d, cache.z.data() + k));
+    for (std::size_t k = begin; k < end; k += lanes) {
+        const auto dx = hn::Sub(vx, hn::LoadU(d, x + k));
+        const auto dy = hn::Sub(vy, hn::LoadU(d, y + k));
+        const auto dz = hn::Sub(vz, hn::LoadU(d, z + k));
         const auto dist2 = hn::MulAdd(dz, dz, hn::MulAdd(dy, dy, hn::Mul(dx, dx)));
-        const auto j = hn::LoadU(du, cache.index.data() + k);
-        const auto in = hn::And(hn::RebindMask(du, hn::Lt(dist2, vr2)), hn::Ne(j, vself));
+        const auto j = hn::LoadU(du, jx + k);
+        auto in = hn::And(hn::RebindMask(du, hn::Lt(dist2, vr2)), hn::Ne(j, vself));
+        if constexpr (Masked) in = hn::And(in, hn::FirstN(du, end - k));
         // Compress into a register and store the whole vector (the caller's buffer has a
         // vector of slack): on Zen 4 the memory form of vpcompressd is microcoded.
         hn::StoreU(hn::Compress(j, in), du, dst + c);
@@ -42,33 +46,21 @@ Index FilterCandidates(const CandidateCache& cache, const Vec3& xi, Index self, 
     }
     return c;
 }
+
+Index FilterCandidates(const CandidateCache& cache, const Vec3& xi, Index self, float r2, Index* dst) {
+    // The padding past cache.count holds far points, which fail the distance test.
+    return FilterRun<false>(cache.x.data(), cache.y.data(), cache.z.data(), cache.index.data(), 0, cache.count, xi,
+                            self, r2, dst, 0);
+}
+
 Index FilterRanges(const UniformGrid& grid, const CandidateRanges& ranges, const Vec3& xi, Index self, float r2,
                    Index* dst) {
-    const hn::ScalableTag<float> d;
-    const hn::RebindToUnsigned<decltype(d)> du;
-    const std::size_t lanes = hn::Lanes(d);
-    const auto vx = hn::Set(d, xi.x()), vy = hn::Set(d, xi.y()), vz = hn::Set(d, xi.z());
-    const auto vr2 = hn::Set(d, r2);
-    const auto vself = hn::Set(du, self);
-    const float *sx = grid.sorted_x(), *sy = grid.sorted_y(), *sz = grid.sorted_z();
-    const Index* sj = grid.sorted_index().data();
+    // A load past a range's end reads the next range's slots or the grid's padding
+    // (UniformGrid::kPadding readable slots after the last): masked off.
     Index c = 0;
-    for (int r = 0; r < ranges.count; ++r) {
-        const std::size_t e = ranges.end[r];
-        // A load past a range's end reads the next range's slots or the grid's padding
-        // (UniformGrid::kPadding readable slots after the last): masked off.
-        for (std::size_t k = ranges.begin[r]; k < e; k += lanes) {
-            const auto dx = hn::Sub(vx, hn::LoadU(d, sx + k));
-            const auto dy = hn::Sub(vy, hn::LoadU(d, sy + k));
-            const auto dz = hn::Sub(vz, hn::LoadU(d, sz + k));
-            const auto dist2 = hn::MulAdd(dz, dz, hn::MulAdd(dy, dy, hn::Mul(dx, dx)));
-            const auto j = hn::LoadU(du, sj + k);
-            const auto in = hn::And(hn::And(hn::RebindMask(du, hn::Lt(dist2, vr2)), hn::Ne(j, vself)),
-                                    hn::FirstN(du, e - k));
-            hn::StoreU(hn::Compress(j, in), du, dst + c);
-            c += Index(hn::CountTrue(du, in));
-        }
-    }
+    for (int r = 0; r < ranges.count; ++r)
+        c = FilterRun<true>(grid.sorted_x(), grid.sorted_y(), grid.sorted_z(), grid.sorted_index().data(),
+                            ranges.begin[r], ranges.end[r], xi, self, r2, dst, c);
     return c;
 }
 #else
