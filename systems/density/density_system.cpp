@@ -136,14 +136,25 @@ void DensitySystem::run_continuity(Context& ctx) {
     const Real floor_rho = continuity_density_floor(rho0);
     // A row without a density (0) starts from its summation, at least rho0; its D_i is then
     // still computed (the slope of individual stepping's interpolation) but not applied.
-    auto start = [&](Index i) {
+    auto summation = [&](Index i) {
         const Vec3 xi = x[i];
         Real sum = 0, bsum = 0;
         for (Index j : fluid_nb.of(i)) sum += kernel.w((xi - x[j]).norm());
         if (has_boundary)
             for (Index b : boundary_nb->of(i)) bsum += vb[b] * kernel.w((xi - xb[b]).norm());
-        rho[i] = std::max(m * (kernel.w(0) + sum) + rho0 * bsum, rho0);
+        return std::max(m * (kernel.w(0) + sum) + rho0 * bsum, rho0);
     };
+    auto start = [&](Index i) { rho[i] = summation(i); };
+    // A row with no fluid neighbour (a droplet, alone or against a wall) takes the summation
+    // density, as a started row does: max(m W(0) + rho0 sum_b V_b W_ib, rho0) (Akinci et al.
+    // 2012 eq. 4 with the boundary). Its continuity density has nothing to relax it (no pair, no
+    // diffusion), and the boundary term integrated over its own long steps does not return to
+    // where it started after a wall contact: evaluated at each step's end it overshoots on the way
+    // in and undershoots on the way out, so the droplet leaves every contact denser than it came
+    // and its extra pressure throws it back faster (a single particle between two walls 0.3 m
+    // apart went from 12 to 113 m/s in 0.2 s at lambda_c 0.4). The summation density is a function
+    // of position: the wall force on such a row is conservative.
+    auto isolated = [&](Index i) { return fluid_nb.of(i).empty(); };
     auto rate = [&](Index i) {
         const Vec3 xi = x[i], vi = v[i];
         const Real rhoi = rho[i];
@@ -214,7 +225,8 @@ void DensitySystem::run_continuity(Context& ctx) {
         });
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 2048), [&](const auto& r) {
             for (std::size_t i = r.begin(); i < r.end(); ++i) {
-                if (!std::isnan(p[i])) rho[i] = std::max(rho[i] + dt * drho[i], floor_rho);
+                if (isolated(Index(i))) rho[i] = summation(Index(i));
+                else if (!std::isnan(p[i])) rho[i] = std::max(rho[i] + dt * drho[i], floor_rho);
                 p[i] = tait_pressure(rho[i], rho0, ph.tait_b);
             }
         });
@@ -240,7 +252,12 @@ void DensitySystem::run_continuity(Context& ctx) {
         rates(active.data(), r.begin(), r.end());
         for (std::size_t k = r.begin(); k < r.end(); ++k) {
             const Index i = active[k];
-            next[k] = next[k] < 0 ? rho[i] : std::max(rho_last[i] + Real(to_seconds(now - t_last[i])) * drho[i], floor_rho);
+            if (isolated(i)) {
+                next[k] = summation(i);
+                drho[i] = 0;  // held until its next evaluation, not interpolated
+            } else {
+                next[k] = next[k] < 0 ? rho[i] : std::max(rho_last[i] + Real(to_seconds(now - t_last[i])) * drho[i], floor_rho);
+            }
         }
     });
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, active.size(), 1024), [&](const auto& r) {
