@@ -74,7 +74,8 @@ Gain run_tank(WallPressure walls) {
 
 // Measured 2026-12-04 (density floored at 0.99 rho0; docs/results/validation.md, "Wall pressure"):
 // extrapolated +0.049 J, mirrored +26.0 J (537x as much; its kinetic energy at the end 10.0 J
-// against 0.042 J). With the floor at rho0 itself (2026-12-03): -0.039 J and +10.6 J.
+// against 0.042 J); since droplets take the summation density, +0.041 J and +25.4 J (627x).
+// With the floor at rho0 itself (2026-12-03): -0.039 J and +10.6 J.
 // Bounds: the extrapolated walls' change within 0.2 J (4x the measured; the fluid's own
 // integration error), the mirrored walls' gain at least 5 J and 50x the extrapolated walls'.
 TEST(WallEnergy, ExtrapolatedWallsKeepARestingTanksEnergy) {
