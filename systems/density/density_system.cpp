@@ -151,9 +151,9 @@ void DensitySystem::run_continuity(Context& ctx) {
     // diffusion), and the boundary term integrated over its own long steps does not return to
     // where it started after a wall contact: evaluated at each step's end it overshoots on the way
     // in and undershoots on the way out, so the droplet leaves every contact denser than it came
-    // and its extra pressure throws it back faster (a single particle between two walls 0.3 m
-    // apart went from 12 to 113 m/s in 0.2 s at lambda_c 0.4). The summation density is a function
-    // of position: the wall force on such a row is conservative.
+    // and its extra pressure throws it back faster (docs/methods.md, "A droplet takes the
+    // summation density"). The summation density is a function of position: the wall force on
+    // such a row is conservative.
     auto isolated = [&](Index i) { return fluid_nb.of(i).empty(); };
     auto rate = [&](Index i) {
         const Vec3 xi = x[i], vi = v[i];
