@@ -29,6 +29,12 @@ for r in rows:
     assert "exp err front %" in r and float(r["exp err front %"]) > 0
     assert float(r["cpu_s"]) > 0
 assert float(next(r for r in rows if r["configuration"] == "global")["speedup_vs_global"]) == 1.0
+# the net's catches and, for WCSPH, the droplet contacts among them, as the runs' summaries say
+assert int(rows[1]["net_catches"]) == g["boundary_collisions_total"], (rows[1], g)
+for r in rows:
+    wcsph = not r["configuration"].startswith(("pcisph", "dfsph"))
+    assert (r["droplet_contacts"] != "") == wcsph, r
+    assert not wcsph or 0 <= int(r["droplet_contacts"]) <= int(r["net_catches"]), r
 md = (d / "study.md").read_text()
 assert md.count("\n| ") == 10 and "exp. err front" in md and "2 threads" in md, md
 for png in ("pareto.png", "dt.png"):

@@ -470,6 +470,10 @@ def main():
             # time average over the run (each step weighted by its dt), and the maximum
             "avg_density_error_pct": 100 * float(np.sum(stats["rho_err_avg"] * dt) / np.sum(dt)),
             "max_density_error_pct": 100 * r["max_density_error"],
+            # the safety net's corrections over the run, and those of particles with no fluid
+            # neighbour (lone droplets, whose wall contact the net is by design; WCSPH only)
+            "net_catches": r.get("boundary_collisions_total", 0),
+            "droplet_contacts": r.get("droplet_contacts_total"),
         })
         mine = primary_series(r["_dir"], study.probes)
         rel = []
@@ -512,7 +516,7 @@ def main():
             f"Reference: constant, Δt = {1e3 * ref_summary['avg_dt_s']:.4g} ms, {ref_summary['steps']:,} steps, "
             f"{ref_summary['wall_time_s']:.1f} s wall.")
     hdr = ["configuration", "particles", "sim s", "wall s", "CPU s", "steps", "Δt ms avg (min–max)", "active %",
-           "speed-up vs global", "vs constant", "ρ err avg / max %"] + \
+           "speed-up vs global", "vs constant", "ρ err avg / max %", "net catches (droplets)"] + \
           [k.replace("dev ", "RMS dev ") for k in dev_cols] + ["dev (mean rel.)"] + \
           [k.replace("exp err ", "exp. err ") + " (ΔT)" for k in exp_cols]
     wave_cols = "wave period s" in columns
@@ -526,7 +530,8 @@ def main():
         cells = [row["configuration"], f"{row['particles']:,}", f"{row['simulated_s']:.3g}", f"{row['wall_s']:.1f}",
                  f"{row['cpu_s']:.1f}", f"{row['steps']:,}", f"{row['avg_dt_ms']:.3g} ({row['min_dt_ms']:.3g}–{row['max_dt_ms']:.3g})",
                  f"{row['avg_active_pct']:.0f}", fmt(row["speedup_vs_global"]), fmt(row["speedup_vs_constant"]),
-                 f"{row['avg_density_error_pct']:.2f} / {row['max_density_error_pct']:.1f}"]
+                 f"{row['avg_density_error_pct']:.2f} / {row['max_density_error_pct']:.1f}",
+                 f"{row['net_catches']:,}" + (f" ({row['droplet_contacts']:,})" if row["droplet_contacts"] is not None else "")]
         cells += [fmt(row.get(k)) for k in dev_cols] + [fmt(row["deviation (mean rel.)"])]
         cells += [f"{row[k]:.1f} ({row[k.replace('exp err ', 'exp shift ').replace(' %', '')]:+.2f})" for k in exp_cols]
         if wave_cols:

@@ -208,6 +208,8 @@ namespace counter {
 inline constexpr Counter updated{"updated"};                  ///< fluid particles whose forces were evaluated
 inline constexpr Counter neighbour_pairs{"neighbour_pairs"};  ///< fluid-fluid list entries of those
 inline constexpr Counter collisions{"collisions"};            ///< particles put back on a boundary surface
+/// those of `collisions` that had no fluid neighbour: a lone droplet's contact with a wall
+inline constexpr Counter droplet_contacts{"droplet_contacts"};
 inline constexpr Counter active{"active"};                    ///< fluid particles active this step
 inline constexpr Counter neighbour_searches{"neighbour_searches"};  ///< lists rebuilt
 inline constexpr Counter force_evaluations{"force_evaluations"};    ///< forces evaluated

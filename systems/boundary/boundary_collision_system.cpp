@@ -24,7 +24,9 @@ Access BoundaryCollisionSystem::access() const {
         .write(fluid(comp::position), fluid(comp::velocity), fluid(comp::wake), counter::collisions)
         .write_if(m_active_rows, res::collided)
         .read_if(m_active_rows, res::active_set)
-        .read_if(m_moving, res::dt);  // the body's position at the step's end
+        .read_if(m_moving, res::dt)  // the body's position at the step's end
+        .read_if(m_count_droplets, res::fluid_neighbours)
+        .write_if(m_count_droplets, counter::droplet_contacts);
     if (m_active_rows) a.rows(res::active_set);
     return a;
 }
@@ -139,9 +141,13 @@ void BoundaryCollisionSystem::run(Context& ctx) {
         ctx.has(SetId::Fluid, comp::wake.name) ? ctx.write(fluid(comp::wake)) : std::span<std::uint8_t>{};
     tbb::enumerable_thread_specific<std::vector<Index>> hits;
     const std::vector<Index>* rows = m_active_rows ? &ctx.read(res::active_set) : nullptr;
-    ctx.write(counter::collisions) = tbb::parallel_reduce(
-        tbb::blocked_range<std::size_t>(0, rows ? rows->size() : x.size(), 4096), std::uint64_t(0),
-        [&](const auto& r, std::uint64_t count) {
+    const NeighbourLists* lists = m_count_droplets ? &ctx.read(res::fluid_neighbours) : nullptr;
+    struct Count {
+        std::uint64_t hits = 0, droplets = 0;
+    };
+    const Count total = tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, rows ? rows->size() : x.size(), 4096), Count{},
+        [&](const auto& r, Count count) {
             for (std::size_t k = r.begin(); k < r.end(); ++k) {
                 const std::size_t i = rows ? (*rows)[k] : k;
                 bool hit = false;
@@ -163,17 +169,24 @@ void BoundaryCollisionSystem::run(Context& ctx) {
                 if (hit && !wake.empty()) wake[i] = 1;
                 // Binned stepping: the same, through the list BinnedWakeSystem reads.
                 if (hit && m_active_rows) hits.local().push_back(Index(i));
-                count += hit;
+                count.hits += hit;
+                count.droplets += hit && lists && lists->of(i).empty();
             }
             return count;
         },
-        std::plus<>());
+        [](Count a, Count b) { return Count{a.hits + b.hits, a.droplets + b.droplets}; });
+    ctx.write(counter::collisions) = total.hits;
+    if (m_count_droplets) ctx.write(counter::droplet_contacts) = total.droplets;
     if (m_active_rows) {
         auto& out = ctx.write(res::collided);
         out.clear();
         for (const auto& v : hits) out.insert(out.end(), v.begin(), v.end());
         std::sort(out.begin(), out.end());
     }
+}
+
+void BoundaryCollisionSystem::summarise(const World&, const RunTotals& totals, nlohmann::json& j) const {
+    if (m_count_droplets) j["droplet_contacts_total"] = std::uint64_t(totals.counter_sum(counter::droplet_contacts.name));
 }
 
 }  // namespace sph

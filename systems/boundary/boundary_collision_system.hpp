@@ -9,6 +9,13 @@
 /// pressure is clamped at zero), so a thin splash hitting a wall can cross the single
 /// boundary layer. The number of particles corrected each step is reported
 /// (`collisions` in stats.csv); it is zero when the particle boundary alone holds.
+///
+/// With `count_droplets` the corrected particles that have no fluid neighbour this step are
+/// counted apart (`droplet_contacts`, a part of `collisions`; summary `droplet_contacts_total`).
+/// Such a particle's density is its summation density, at most about 0.8 rho0 at a wall (see
+/// DensitySystem), so it has no pressure and the wall none for it: the net is its contact, by
+/// design. The rest of `collisions` is the fluid crossing the wall in spite of its pressure,
+/// the figure that says whether the particle boundary holds.
 #include <vector>
 
 #include "engine/data/scene.hpp"
@@ -25,17 +32,22 @@ public:
     /// @param active_rows binned stepping: net the active rows only (the particles evaluated
     /// this step; a sleeping one moves at most lambda_v h between its evaluations, so it is
     /// netted at the end of its next one) and list the corrected ones in res::collided.
+    /// @param count_droplets read this step's fluid neighbour lists (of every row netted) and
+    /// count the contacts of rows without fluid neighbours apart.
     explicit BoundaryCollisionSystem(std::vector<BoundaryDesc> boundaries, bool moving = false,
-                                     bool active_rows = false)
-        : m_boundaries(std::move(boundaries)), m_moving(moving), m_active_rows(active_rows) {}
+                                     bool active_rows = false, bool count_droplets = false)
+        : m_boundaries(std::move(boundaries)), m_moving(moving), m_active_rows(active_rows),
+          m_count_droplets(count_droplets) {}
     std::string name() const override { return "boundary_collision"; }
     Access access() const override;
     void run(Context& ctx) override;
+    void summarise(const World& w, const RunTotals& totals, nlohmann::json& summary) const override;
 
 private:
     std::vector<BoundaryDesc> m_boundaries;
     bool m_moving;
     bool m_active_rows;
+    bool m_count_droplets;
 };
 
 }  // namespace sph

@@ -70,7 +70,9 @@ Recipe make_wcsph_recipe(const Scene& scene) {
         if (mode == SteppingMode::Global) r.step.push_back(std::make_unique<GlobalDtSystem>(stepping));
         r.step.push_back(std::make_unique<SymplecticEulerSystem>());
     }
-    if (boundary) r.step.push_back(std::make_unique<BoundaryCollisionSystem>(scene.boundaries, moving, binned));
+    // Droplet contacts counted apart (the net is their contact by design, DensitySystem).
+    if (boundary)
+        r.step.push_back(std::make_unique<BoundaryCollisionSystem>(scene.boundaries, moving, binned, true));
     if (boundary && binned) r.step.push_back(std::make_unique<BinnedWakeSystem>());
     return r;
 }

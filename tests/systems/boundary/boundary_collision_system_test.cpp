@@ -16,6 +16,8 @@
 #include "engine/data/world_init.hpp"
 #include "engine/graph/system.hpp"
 #include "systems/boundary/boundary_collision_system.hpp"
+#include "systems/neighbours/fluid_grid_system.hpp"
+#include "systems/neighbours/fluid_neighbours_system.hpp"
 #include "test_scenes.hpp"
 
 using namespace sph;
@@ -82,6 +84,56 @@ TEST(BoundaryCollision, ContainerPutsEscapedParticlesBackOnTheWall) {
     // A second pass finds nothing: every particle is now on or inside the surface.
     run_system(BoundaryCollisionSystem(s.boundaries), w);
     EXPECT_EQ(w.counter_value("collisions"), 0u);
+}
+
+// Droplet contacts (`count_droplets`): of the particles the net corrects, those with no fluid
+// particle within the support radius h (this step's lists, checked here against a brute-force
+// distance test over every pair) count in `droplet_contacts` as well as in `collisions`. Block
+// [0, 0.16] x [0, 0.2] x [0, 0.1], r = 0.01, h = 0.04 m (4 r); moved particles:
+//   0: (0.31, 0.1, 0.05), beyond x = 0.3, 0.15 m from the block: a droplet;
+//   1: (0.1, -0.005, 0.05), below the floor, under the block: has neighbours;
+//   2: (0.29, 0.31, 0.05), beyond y = 0.3, with particle 3 at 0.01 m: not a droplet;
+//   3: (0.29, 0.3, 0.05), on the wall: a neighbour of 2, not corrected;
+//   4: (0.2, 0.1, 0.11), beyond z = 0.1; the nearest block particle, (0.15, 0.09, 0.09), is
+//      sqrt(0.05^2 + 0.01^2 + 0.02^2) = 0.055 m away: a droplet;
+//   5: (0.2, 0.31, 0.05), beyond y = 0.3, 0.09 m from particle 2 and 0.13 m from the block: a droplet.
+// collisions = 5 (0, 1, 2, 4, 5), droplet_contacts = 3 (0, 4 and 5).
+TEST(BoundaryCollision, CountsTheContactsOfParticlesWithoutFluidNeighboursApart) {
+    World w;
+    Scene s = test::tank_scene(Vec3d(0.16, 0.2, 0.1), Vec3d(0.3, 0.3, 0.1));
+    initialise_world(w, s);
+    auto x = w.fluid.store.get(comp::position);
+    ASSERT_NEAR(double(w.physics.h), 0.04, 1e-7);
+    x[0] = Vec3(0.31f, 0.1f, 0.05f);
+    x[1] = Vec3(0.1f, -0.005f, 0.05f);
+    x[2] = Vec3(0.29f, 0.31f, 0.05f);
+    x[3] = Vec3(0.29f, 0.3f, 0.05f);
+    x[4] = Vec3(0.2f, 0.1f, 0.11f);
+    x[5] = Vec3(0.2f, 0.31f, 0.05f);
+    const std::vector<Vec3> before(x.begin(), x.end());
+    run_system(FluidGridSystem(), w);
+    run_system(FluidNeighbourSystem(), w);
+    run_system(BoundaryCollisionSystem(s.boundaries, false, false, true), w);
+    // The oracle: every pair's distance at the positions the lists were built from.
+    const Real h = w.physics.h;
+    std::uint64_t hits = 0, droplets = 0;
+    for (std::size_t i = 0; i < before.size(); ++i) {
+        if (before[i] == x[i]) continue;  // not corrected
+        ++hits;
+        bool alone = true;
+        for (std::size_t j = 0; j < before.size() && alone; ++j)
+            alone = j == i || (before[i] - before[j]).norm() >= h;
+        droplets += alone;
+    }
+    EXPECT_EQ(hits, 5u);
+    EXPECT_EQ(droplets, 3u);
+    EXPECT_EQ(w.counter_value("collisions"), hits);
+    EXPECT_EQ(w.counter_value("droplet_contacts"), droplets);
+    // Without the flag the counter is not declared: the net reads no lists.
+    World w2;
+    initialise_world(w2, s);
+    run_system(BoundaryCollisionSystem(s.boundaries), w2);
+    EXPECT_FALSE(w2.counters.count("droplet_contacts"));
 }
 
 // Without a wake column (global stepping registers none) the correction is the same.
