@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <map>
 #include <string>
@@ -166,6 +167,14 @@ struct World {
     /// Binned stepping: the particles the collision net moved this step (ascending); their
     /// steps are cut to end at the next due time (BinnedWakeSystem).
     std::vector<Index> collided;
+    /// Binned stepping: the rows whose velocity, density and pressure were brought to the
+    /// step's time for the pair systems (the active rows and their fluid neighbours, ascending;
+    /// DriftRowsSystem). The other sleeping rows are drifted lazily: see `synchronise`.
+    std::vector<Index> drifted;
+    /// Set by a recipe whose step leaves rows behind the clock (binned stepping's lazy drift):
+    /// brings every fluid row to the clock's time. Simulation::synchronise calls it before
+    /// anything reads the whole fluid (observers, the spatial sort, the end of a run).
+    std::function<void(World&)> synchronise;
     /// Boundaries with a motion (empty when every boundary is static), in scene order.
     std::vector<MovingBody> moving_bodies;
     /// Boundary particles [0, static_boundary_end) never move (z-ordered once).
@@ -200,6 +209,7 @@ inline constexpr Resource<Rollback> rollback{"step.rollback", &World::rollback};
 inline constexpr Resource<std::vector<Index>> active_set{"fluid.active_set", &World::active_set};
 inline constexpr Resource<std::vector<Index>> halo_set{"fluid.halo_set", &World::halo_set};
 inline constexpr Resource<std::vector<Index>> collided{"fluid.collided", &World::collided};
+inline constexpr Resource<std::vector<Index>> drifted{"fluid.drifted", &World::drifted};
 inline constexpr Resource<std::vector<MovingBody>> moving_bodies{"boundary.moving_bodies", &World::moving_bodies};
 }  // namespace res
 

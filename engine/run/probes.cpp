@@ -371,6 +371,12 @@ void ProbeSet::sample(std::size_t k, const World& w, const UniformGrid& grid) {
     ++m_taken[k];
 }
 
+bool ProbeSet::any_due(double t) const {
+    for (std::size_t k = 0; k < m_probes.size(); ++k)
+        if (t + 1e-12 >= double(m_taken[k]) / m_probes[k].rate) return true;
+    return false;
+}
+
 void ProbeSet::sample_due(const World& w) {
     std::vector<std::size_t> due;
     const double t = w.clock.t;

@@ -96,6 +96,8 @@ public:
     bool empty() const { return m_probes.empty(); }
     /// @brief Samples every probe whose next sample time has come (all of them at t = 0).
     void sample_due(const World& w);
+    /// @brief true when sample_due at time t would sample a probe.
+    bool any_due(double t) const;
     /// @brief Samples every probe now, whatever its rate.
     void sample_all(const World& w);
     const std::vector<ProbeSeries>& series() const { return m_series; }

@@ -298,6 +298,16 @@ void Recorder::write_collection(const World& w) const {
     if (w.boundary.size() > w.static_boundary_end) collection("boundary/moving", "boundary_moving.pvd");
 }
 
+bool Recorder::reads_particles(const Simulation& sim) const {
+    // The conditions under which after_step calls front_x, sample_due and write_frame.
+    const World& w = sim.world();
+    const double t = w.clock.t, end = w.scene.simulation.end_time, rate = w.scene.simulation.frame_rate;
+    if (sim.last().rolled_back) return false;
+    if (m_fronts.size() < 3 && t >= 0.25 * double(m_fronts.size() + 1) * end - 1e-9) return true;
+    if (rate > 0 && t >= m_next_frame_time - 1e-9) return true;
+    return m_probes.any_due(t);
+}
+
 void Recorder::after_step(const Simulation& sim) {
     const World& w = sim.world();
     const StepRecord& rec = sim.last();

@@ -40,6 +40,10 @@ public:
     Recorder& operator=(const Recorder&) = delete;
     /// @brief Called after every step: appends the stats row, writes a frame when due.
     void after_step(const Simulation& sim);
+    /// @brief true when after_step at the simulation's present time reads particle columns (a
+    /// frame, a probe sample or a front is due): a caller that runs the simulation without
+    /// synchronised observers (Simulation::set_synchronise_observers) synchronises then.
+    bool reads_particles(const Simulation& sim) const;
     /// @brief Writes the initial frame (t = 0).
     void begin(const Simulation& sim);
     /// @brief Flushes stats.csv and writes summary.json; returns the summary.

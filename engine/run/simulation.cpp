@@ -64,6 +64,7 @@ void Simulation::trace_non_finite(std::size_t system) {
     const std::vector<Index>* rows = nullptr;
     if (access.written_rows() == key_of(res::active_set)) rows = &m_world.active_set;
     if (access.written_rows() == key_of(res::collided)) rows = &m_world.collided;
+    if (access.written_rows() == key_of(res::drifted)) rows = &m_world.drifted;
     for (const auto& wr : access.writes()) {
         if (wr.rfind("fluid.", 0) != 0) continue;
         const std::string col = wr.substr(6);
@@ -106,7 +107,14 @@ std::vector<std::pair<std::string, std::size_t>> Simulation::memory_parts() cons
     return parts;
 }
 
+void Simulation::synchronise() {
+    if (!m_behind) return;
+    m_world.synchronise(m_world);
+    m_behind = false;
+}
+
 void Simulation::spatial_sort() {
+    synchronise();  // the order follows every row's position at the clock's time
     auto perm = zorder_permutation(m_world.fluid_grid, m_world.fluid.store.get(comp::position));
     m_world.fluid.store.permute(perm);
     // Lists that are kept across steps (individual stepping reuses inactive particles' lists)
@@ -116,11 +124,17 @@ void Simulation::spatial_sort() {
 }
 
 void Simulation::step() {
+    step_once();
+    if (m_sync_observers) synchronise();
+}
+
+void Simulation::step_once() {
     const int interval = m_world.scene.simulation.sort_interval;
     if (interval > 0 && m_world.clock.step % interval == 0) spatial_sort();
     if (m_ring) m_ring->save(m_world);
     m_non_finite = NonFinite{};
     m_graph->run();
+    m_behind = bool(m_world.synchronise);  // a lazy recipe leaves the sleeping rows behind
     m_last = StepRecord{m_world.clock.step, m_world.clock.t, m_world.step_size.dt, m_world.step_size.dt_stable, false};
     if (m_ring && m_world.rollback.request_dt > 0) {
         serve_rollback();
@@ -193,6 +207,7 @@ bool Simulation::advance(double end_time, const std::function<void(const Simulat
         if (after_step) after_step(*this);
         if (m_stop.exchange(false, std::memory_order_relaxed)) break;
     }
+    synchronise();
     m_world.clock.t_stop = std::numeric_limits<double>::infinity();
     return m_world.clock.t_ticks >= end;
 }

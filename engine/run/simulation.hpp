@@ -42,7 +42,18 @@ public:
 
     /// @brief Advances one step. Throws SimulationError on a NaN, a particle outside the
     /// domain or a step below dt_min, naming the particle, the step and the system.
+    /// Unless set_synchronise_observers(false), every fluid row is at the clock's time after it.
     void step();
+    /// @brief Brings every fluid row to the clock's time where the recipe drifts sleeping rows
+    /// lazily (binned stepping: He et al. Alg. 2 lines 19-21 for the rows no system read this
+    /// step); a no-op otherwise or when nothing is behind. Idempotent: the rows' values are
+    /// those an eager drift would have given, bit for bit.
+    void synchronise();
+    /// @brief true (the default): step() and run_until's `after_step` see every row at the
+    /// clock's time. false: only what the step read is current, and the caller calls
+    /// synchronise() before it reads the whole fluid (sph-run does at frames and probes).
+    /// run_until synchronises when it returns either way.
+    void set_synchronise_observers(bool on) { m_sync_observers = on; }
     /// @brief Steps until `end_time` (the scene's by default), calling `after_step` each step.
     /// Returns false when it stopped earlier because request_stop() was called. A scene's
     /// standing wave is given to the fluid when the clock reads its `at` (the run is split there).
@@ -67,6 +78,10 @@ public:
 private:
     std::atomic<bool> m_stop{false};
     bool m_wave_given = false;
+    bool m_sync_observers = true;
+    bool m_behind = false;  ///< some fluid row is behind the clock (World::synchronise pending)
+    /// One step without the observers' synchronisation.
+    void step_once();
     /// run_until without the standing wave's split.
     bool advance(double end_time, const std::function<void(const Simulation&)>& after_step);
     /// Sets the fluid's velocity to the scene's standing wave if the clock reads its `at`.

@@ -11,15 +11,19 @@
 #include "engine/data/world.hpp"
 #include "engine/graph/context.hpp"
 #include "systems/density/density_kernels.hpp"
+#include "systems/integrate/drift.hpp"
 
 namespace sph {
 
 Access AsyncIntegrationSystem::access() const {
-    return Access()
+    Access a = Access()
         .read(fluid(comp::acceleration), fluid(comp::active), fluid(comp::t_last), fluid(comp::drho_dt),
               fluid(comp::density_last), res::dt)
+        .read_if(m_active_only, res::active_set)
         .write(fluid(comp::velocity), fluid(comp::position), fluid(comp::position_last), fluid(comp::velocity_last),
                fluid(comp::density), fluid(comp::pressure));
+    if (m_active_only) a.rows(res::active_set);
+    return a;
 }
 
 void AsyncIntegrationSystem::register_components(World& w) {
@@ -45,18 +49,26 @@ void AsyncIntegrationSystem::run(Context& ctx) {
     const auto rho0 = ctx.read(fluid(comp::density_last));
     const Tick t_end = ctx.clock().t_ticks + ctx.read(res::dt).dt_ticks;
     const Real rest = ctx.physics().rest_density, b = ctx.physics().tait_b;
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 4096), [&](const auto& r) {
-        for (std::size_t i = r.begin(); i < r.end(); ++i) {
-            if (active[i]) {  // evaluated now: this is its new base state (t_last = t_sim)
-                x0[i] = x[i];
-                v0[i] = v[i];
-            }
-            const Real dt = Real(to_seconds(t_end - t_last[i]));  // line 19
-            v[i] = v0[i] + dt * a[i];                               // line 20
-            x[i] = x0[i] + dt * v[i];                               // line 21
-            rho[i] = rho0[i] + dt * drho[i];                        // line 9, at the new time
-            p[i] = tait_pressure(rho[i], rest, b);
+    auto advance = [&](std::size_t i) {
+        if (active[i]) {  // evaluated now: this is its new base state (t_last = t_sim)
+            x0[i] = x[i];
+            v0[i] = v[i];
         }
+        const Real dt = drift_interval(t_end, t_last[i]);  // line 19
+        v[i] = drifted_velocity(v0[i], a[i], dt);           // line 20
+        x[i] = drifted_position(x0[i], v[i], dt);           // line 21
+        rho[i] = drifted_density(rho0[i], drho[i], dt);     // line 9, at the new time
+        p[i] = tait_pressure(rho[i], rest, b);
+    };
+    if (m_active_only) {
+        const auto& set = ctx.read(res::active_set);
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, set.size(), 4096), [&](const auto& r) {
+            for (std::size_t k = r.begin(); k < r.end(); ++k) advance(set[k]);
+        });
+        return;
+    }
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 4096), [&](const auto& r) {
+        for (std::size_t i = r.begin(); i < r.end(); ++i) advance(i);
     });
 }
 

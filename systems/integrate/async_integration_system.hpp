@@ -11,10 +11,18 @@ namespace sph {
 
 class AsyncIntegrationSystem final : public System {
 public:
+    /// @param active_only binned stepping's lazy drift: the active rows only (their new base
+    /// state and their state at the new time, which the collision net reads); the sleeping
+    /// rows are drifted when a step reads them (DriftSystem, DriftRowsSystem) or by
+    /// World::synchronise.
+    explicit AsyncIntegrationSystem(bool active_only = false) : m_active_only(active_only) {}
     std::string name() const override { return "async_integrate"; }
     Access access() const override;
     void register_components(World& w) override;
     void run(Context& ctx) override;
+
+private:
+    bool m_active_only;
 };
 
 }  // namespace sph

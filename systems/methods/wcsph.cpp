@@ -10,6 +10,7 @@
 #include "systems/forces/forces_system.hpp"
 #include "systems/forces/gradient_correction_system.hpp"
 #include "systems/integrate/async_integration_system.hpp"
+#include "systems/integrate/drift_system.hpp"
 #include "systems/integrate/symplectic_euler_system.hpp"
 #include "systems/metrics/step_stats_system.hpp"
 #include "systems/neighbours/boundary_neighbours_system.hpp"
@@ -42,15 +43,21 @@ Recipe make_wcsph_recipe(const Scene& scene) {
     if (mode == SteppingMode::Constant) r.step.push_back(std::make_unique<ConstantDtSystem>(stepping.dt));
     if (mode == SteppingMode::Individual)
         r.step.push_back(std::make_unique<SelectActiveSystem>(stepping.activation));
+    // binned: every row's position at the step's time, before anything reads one (the lazy
+    // drift, systems/integrate/drift_system.hpp).
+    if (binned) r.step.push_back(std::make_unique<DriftSystem>());
     if (binned) r.step.push_back(std::make_unique<BinnedSelectSystem>(stepping.dt_min, stepping.dt_max));
     r.step.push_back(std::make_unique<FluidGridSystem>());
     // binned reads only the active particles' lists: compact, the others emptied.
     r.step.push_back(std::make_unique<FluidNeighbourSystem>(individual, !binned));
     if (boundary) r.step.push_back(std::make_unique<BoundaryNeighbourSystem>(individual, !binned));
-    const bool continuity = density_form(scene) == DensityForm::Continuity;
-    r.step.push_back(std::make_unique<DensitySystem>(boundary, individual, continuity, moving));
     // The walls' pressure from the fluid around them (Adami et al. 2012), once the fluid's is known.
     const bool extrapolated = boundary && wall_pressure(scene) == WallPressure::Extrapolated;
+    // binned: velocity, density and pressure of the rows the pair systems read (every row when
+    // the extrapolated walls read the fluid beyond the active rows' lists).
+    if (binned) r.step.push_back(std::make_unique<DriftRowsSystem>(extrapolated));
+    const bool continuity = density_form(scene) == DensityForm::Continuity;
+    r.step.push_back(std::make_unique<DensitySystem>(boundary, individual, continuity, moving));
     if (extrapolated) r.step.push_back(std::make_unique<WallPressureSystem>(individual));
     const bool corrected = scene.fluid.pressure_gradient == PressureGradient::Corrected;
     if (corrected) r.step.push_back(std::make_unique<GradientCorrectionSystem>(boundary, individual));
@@ -59,9 +66,10 @@ Recipe make_wcsph_recipe(const Scene& scene) {
     r.step.push_back(std::make_unique<StepStatsSystem>(
         individual, binned ? StepStatsSystem::Rows::Active : StepStatsSystem::Rows::All));
     if (binned) {
-        // Limiter, wake-up and the next due time, then He Alg. 2 lines 18-21 for every row.
+        // Limiter, wake-up and the next due time, then He Alg. 2 lines 18-21 for the active rows
+        // (the others are drifted when read).
         r.step.push_back(std::make_unique<BinnedStepSystem>(stepping.dt_min, stepping.dt_max));
-        r.step.push_back(std::make_unique<AsyncIntegrationSystem>());
+        r.step.push_back(std::make_unique<AsyncIntegrationSystem>(true));
     } else if (individual) {
         r.step.push_back(std::make_unique<DtPropagationSystem>());
         r.step.push_back(std::make_unique<IndividualGlobalDtSystem>(stepping.activation, stepping.dt_max));

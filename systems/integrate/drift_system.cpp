@@ -1,0 +1,200 @@
+// Binned stepping's lazy drift: He et al. Alg. 2 lines 19-21 (x, v from the base state) and
+// line 9 (rho from its slope, He eq. 5; p from Tait, He eq. 2) evaluated for the rows a step
+// reads (drift_system.hpp states the contract).
+#include "systems/integrate/drift_system.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <atomic>
+
+#include "engine/data/components.hpp"
+#include "engine/data/world.hpp"
+#include "engine/graph/context.hpp"
+#include "systems/density/density_kernels.hpp"
+#include "systems/integrate/drift.hpp"
+
+namespace sph {
+
+namespace {
+
+/// Rows per task of the streaming passes.
+constexpr std::size_t kGrain = 4096;
+
+}  // namespace
+
+void drift_fluid(World& w) {
+    ComponentStore& s = w.fluid.store;
+    auto x = s.get(comp::position);
+    auto v = s.get(comp::velocity);
+    auto rho = s.get(comp::density);
+    auto p = s.get(comp::pressure);
+    const auto x0 = s.get(comp::position_last);
+    const auto v0 = s.get(comp::velocity_last);
+    const auto rho0 = s.get(comp::density_last);
+    const auto a = s.get(comp::acceleration);
+    const auto drho = s.get(comp::drho_dt);
+    const auto t_last = s.get(comp::t_last);
+    const Tick now = w.clock.t_ticks;
+    const Real rest = w.physics.rest_density, b = w.physics.tait_b;
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), kGrain), [&](const auto& r) {
+        for (std::size_t i = r.begin(); i < r.end(); ++i) {
+            if (t_last[i] == now) continue;
+            const Real dt = drift_interval(now, t_last[i]);
+            v[i] = drifted_velocity(v0[i], a[i], dt);
+            x[i] = drifted_position(x0[i], v[i], dt);
+            rho[i] = drifted_density(rho0[i], drho[i], dt);
+            p[i] = tait_pressure(rho[i], rest, b);
+        }
+    });
+}
+
+// ---- drift ------------------------------------------------------------------------------------
+
+Access DriftSystem::access() const {
+    return Access()
+        .read(fluid(comp::position_last), fluid(comp::velocity_last), fluid(comp::acceleration), fluid(comp::t_last))
+        .write(fluid(comp::position));
+}
+
+void DriftSystem::register_components(World& w) {
+    w.fluid.store.add(comp::position_last);
+    w.fluid.store.add(comp::velocity_last);
+    w.fluid.store.add(comp::density_last);
+    w.fluid.store.add(comp::drho_dt);
+    w.fluid.store.add(comp::t_last);
+    w.fluid.store.add(comp::acceleration);
+    w.synchronise = drift_fluid;
+}
+
+void DriftSystem::run(Context& ctx) {
+    auto x = ctx.write(fluid(comp::position));
+    const auto x0 = ctx.read(fluid(comp::position_last));
+    const auto v0 = ctx.read(fluid(comp::velocity_last));
+    const auto a = ctx.read(fluid(comp::acceleration));
+    const auto t_last = ctx.read(fluid(comp::t_last));
+    const Tick now = ctx.clock().t_ticks;
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), kGrain), [&](const auto& r) {
+        for (std::size_t i = r.begin(); i < r.end(); ++i) {
+            if (t_last[i] == now) continue;
+            const Real dt = drift_interval(now, t_last[i]);
+            x[i] = drifted_position(x0[i], drifted_velocity(v0[i], a[i], dt), dt);
+        }
+    });
+}
+
+// ---- drift_rows -------------------------------------------------------------------------------
+
+Access DriftRowsSystem::access() const {
+    Access acc = Access()
+        .read(fluid(comp::velocity_last), fluid(comp::acceleration), fluid(comp::t_last), fluid(comp::density_last),
+              fluid(comp::drho_dt))
+        .read_if(!m_all, res::active_set, res::fluid_neighbours)
+        .write(fluid(comp::velocity), fluid(comp::density), fluid(comp::pressure), res::drifted);
+    if (!m_all) acc.rows(res::drifted);
+    return acc;
+}
+
+void DriftRowsSystem::register_components(World& w) {
+    w.fluid.store.add(comp::density);
+    w.fluid.store.add(comp::pressure);
+}
+
+void DriftRowsSystem::run(Context& ctx) {
+    auto v = ctx.write(fluid(comp::velocity));
+    auto rho = ctx.write(fluid(comp::density));
+    auto p = ctx.write(fluid(comp::pressure));
+    const auto v0 = ctx.read(fluid(comp::velocity_last));
+    const auto a = ctx.read(fluid(comp::acceleration));
+    const auto t_last = ctx.read(fluid(comp::t_last));
+    const auto rho0 = ctx.read(fluid(comp::density_last));
+    const auto drho = ctx.read(fluid(comp::drho_dt));
+    auto& rows = ctx.write(res::drifted);
+    const Tick now = ctx.clock().t_ticks;
+    const Real rest = ctx.physics().rest_density, b = ctx.physics().tait_b;
+    auto drift = [&](std::size_t i) {
+        if (t_last[i] == now) return;
+        const Real dt = drift_interval(now, t_last[i]);
+        v[i] = drifted_velocity(v0[i], a[i], dt);
+        rho[i] = drifted_density(rho0[i], drho[i], dt);
+        p[i] = tait_pressure(rho[i], rest, b);
+    };
+    rows.clear();
+    const std::size_t n = v.size();
+    const auto& set = m_all ? rows : ctx.read(res::active_set);
+    if (m_all || 4 * set.size() >= n) {
+        // Most rows are read anyway: every row, in one streaming pass.
+        rows.resize(n);
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, kGrain), [&](const auto& r) {
+            for (std::size_t i = r.begin(); i < r.end(); ++i) {
+                rows[i] = Index(i);
+                drift(i);
+            }
+        });
+        return;
+    }
+    // The active rows and their fluid neighbours, each once and ascending.
+    const NeighbourLists& lists = ctx.read(res::fluid_neighbours);
+    m_mark.resize(n, 0);
+    if (set.size() <= 64) {
+        // A handful (a fine bin's step): one task, no atomics.
+        for (Index i : set) {
+            if (!m_mark[i]) rows.push_back(i), m_mark[i] = 1;
+            for (Index j : lists.of(i))
+                if (!m_mark[j]) rows.push_back(j), m_mark[j] = 1;
+        }
+        std::sort(rows.begin(), rows.end());
+        for (Index i : rows) {
+            drift(i);
+            m_mark[i] = 0;
+        }
+        return;
+    }
+    if (64 * set.size() < n) {
+        // Few: each row claimed by the first task that meets it (an atomic byte), then sorted.
+        tbb::enumerable_thread_specific<std::vector<Index>> found;
+        auto claim = [&](Index j, std::vector<Index>& out) {
+            std::atomic_ref<std::uint8_t> mark(m_mark[j]);
+            if (mark.load(std::memory_order_relaxed) == 0 && mark.exchange(1, std::memory_order_relaxed) == 0)
+                out.push_back(j);
+        };
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, set.size(), 256), [&](const auto& r) {
+            auto& out = found.local();
+            for (std::size_t k = r.begin(); k < r.end(); ++k) {
+                claim(set[k], out);
+                for (Index j : lists.of(set[k])) claim(j, out);
+            }
+        });
+        for (const auto& part : found) rows.insert(rows.end(), part.begin(), part.end());
+        std::sort(rows.begin(), rows.end());
+        for (Index i : rows) {
+            drift(i);
+            m_mark[i] = 0;
+        }
+        return;
+    }
+    // Between: mark (a relaxed byte store), then one scan of the marks collects them in order.
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, set.size(), 256), [&](const auto& r) {
+        for (std::size_t k = r.begin(); k < r.end(); ++k) {
+            std::atomic_ref<std::uint8_t>(m_mark[set[k]]).store(1, std::memory_order_relaxed);
+            for (Index j : lists.of(set[k])) std::atomic_ref<std::uint8_t>(m_mark[j]).store(1, std::memory_order_relaxed);
+        }
+    });
+    constexpr std::size_t kChunk = 16384;
+    const std::size_t chunks = (n + kChunk - 1) / kChunk;
+    std::vector<std::vector<Index>> parts(chunks);
+    tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t c) {
+        auto& out = parts[c];
+        for (std::size_t i = c * kChunk, e = std::min(n, i + kChunk); i < e; ++i) {
+            if (!m_mark[i]) continue;
+            m_mark[i] = 0;
+            drift(i);
+            out.push_back(Index(i));
+        }
+    });
+    for (const auto& part : parts) rows.insert(rows.end(), part.begin(), part.end());
+}
+
+}  // namespace sph

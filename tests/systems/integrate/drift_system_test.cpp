@@ -1,0 +1,176 @@
+// Binned stepping's lazy drift (systems/integrate/drift_system.hpp), He et al. Alg. 2 lines
+// 19-21 and 9 from each row's base state, against that closed form in double:
+//   dt = t - t_last,  v = v_last + dt a,  x = x_last + dt v,  rho = rho_last + dt drho/dt,
+//   p = Tait(rho) = B ((max(rho, rho0) / rho0)^7 - 1)
+// on a jittered block of 12,000 rows whose base states are random (|a| <= 87 m/s^2) and whose
+// t_last are up to 0.4 ms behind the clock (one in eight at the clock: current, left alone).
+// * DriftSystem writes every behind row's position and nothing else;
+// * DriftRowsSystem writes velocity, density and pressure of exactly the active rows and their
+//   fluid neighbours (lists built by FluidNeighbourSystem, which NeighbourSearch tests against
+//   brute force), lists them ascending in res::drifted, and leaves every other row's bits as
+//   they were; at 5, n/100, n/10 and n/2 active rows (each of its paths), and with `all`;
+// * drift_fluid (World::synchronise) brings every behind row's four columns to the clock.
+// Tolerance: 2e-6 relative to the value's scale (float arithmetic of a few roundings); positions
+// within 1e-9 + 8e-8 m (a few ulps of 0.4 m), where a wrong term, e.g. v_last for v in line 21,
+// is off by dt^2 |a| up to 1.4e-5 m.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <set>
+#include <vector>
+
+#include "engine/data/components.hpp"
+#include "engine/data/world.hpp"
+#include "engine/data/world_init.hpp"
+#include "engine/graph/system.hpp"
+#include "systems/integrate/drift_system.hpp"
+#include "systems/neighbours/fluid_grid_system.hpp"
+#include "systems/neighbours/fluid_neighbours_system.hpp"
+#include "test_scenes.hpp"
+
+using namespace sph;
+
+namespace {
+
+constexpr Tick kNow = 123'000'000'000;  // 0.123 s
+constexpr Real kSentinel = 12345.0f;
+
+struct Fixture {
+    World w;
+    std::vector<Vec3> x0, v0, a;
+    std::vector<Real> rho0, drho;
+    std::vector<std::int64_t> t_last;
+
+    Fixture() {
+        initialise_world(w, test::tank_scene(Vec3d(0.4, 0.2, 0.15), Vec3d(0.5, 0.3, 0.2), 0.005));
+        test::jitter(w, 11, 0.3f);
+        DriftSystem().register_components(w);
+        DriftRowsSystem().register_components(w);
+        w.clock.t_ticks = kNow;
+        w.clock.t = to_seconds(kNow);
+        auto& s = w.fluid.store;
+        const std::size_t n = s.size();
+        std::mt19937 rng(5);
+        std::uniform_real_distribution<Real> u(-1, 1);
+        std::uniform_int_distribution<std::int64_t> behind(1, 400'000'000);  // up to 0.4 ms
+        auto x = s.get(comp::position);
+        for (std::size_t i = 0; i < n; ++i) {
+            x0.push_back(x[i]);
+            v0.push_back(2 * Vec3(u(rng), u(rng), u(rng)));
+            a.push_back(50 * Vec3(u(rng), u(rng), u(rng)));
+            rho0.push_back(w.physics.rest_density * (1 + Real(0.02) * u(rng)));
+            drho.push_back(200 * u(rng));
+            t_last.push_back(i % 8 == 0 ? kNow : kNow - behind(rng));
+        }
+        std::copy(x0.begin(), x0.end(), s.get(comp::position_last).begin());
+        std::copy(v0.begin(), v0.end(), s.get(comp::velocity_last).begin());
+        std::copy(a.begin(), a.end(), s.get(comp::acceleration).begin());
+        std::copy(rho0.begin(), rho0.end(), s.get(comp::density_last).begin());
+        std::copy(drho.begin(), drho.end(), s.get(comp::drho_dt).begin());
+        std::copy(t_last.begin(), t_last.end(), s.get(comp::t_last).begin());
+        run_system(FluidGridSystem(), w);
+        run_system(FluidNeighbourSystem(), w);
+        reset_outputs();
+    }
+    void reset_outputs() {
+        auto& s = w.fluid.store;
+        std::fill(s.get(comp::velocity).begin(), s.get(comp::velocity).end(), Vec3::Constant(kSentinel));
+        std::fill(s.get(comp::density).begin(), s.get(comp::density).end(), kSentinel);
+        std::fill(s.get(comp::pressure).begin(), s.get(comp::pressure).end(), kSentinel);
+    }
+    double dt(std::size_t i) const { return to_seconds(kNow - t_last[i]); }
+    Vec3d v(std::size_t i) const { return v0[i].cast<double>() + dt(i) * a[i].cast<double>(); }
+    Vec3d x(std::size_t i) const { return x0[i].cast<double>() + dt(i) * v(i); }
+    double rho(std::size_t i) const { return double(rho0[i]) + dt(i) * double(drho[i]); }
+    double p(std::size_t i) const {
+        const double r0 = w.physics.rest_density;
+        return double(w.physics.tait_b) * (std::pow(std::max(rho(i), r0) / r0, 7) - 1);
+    }
+    /// Checks velocity, density and pressure: the closed form on `drifted` rows that are behind,
+    /// the sentinel elsewhere.
+    void expect_rows(const std::vector<Index>& drifted) const {
+        const auto& s = w.fluid.store;
+        const auto vv = s.get(comp::velocity);
+        const auto rr = s.get(comp::density);
+        const auto pp = s.get(comp::pressure);
+        std::vector<std::uint8_t> in(vv.size(), 0);
+        for (Index i : drifted) in[i] = 1;
+        int bad = 0;
+        for (std::size_t i = 0; i < vv.size() && bad < 5; ++i) {
+            if (in[i] && t_last[i] != kNow) {
+                const bool ok = (vv[i].cast<double>() - v(i)).norm() <= 2e-6 * (1 + v(i).norm()) &&
+                                std::abs(rr[i] - rho(i)) <= 2e-6 * rho(i) &&
+                                std::abs(pp[i] - p(i)) <= 2e-6 * (std::abs(p(i)) + double(w.physics.tait_b));
+                bad += !ok;
+                EXPECT_TRUE(ok) << "row " << i << ": v " << vv[i].transpose() << " / " << v(i).transpose() << ", rho "
+                                << rr[i] << " / " << rho(i) << ", p " << pp[i] << " / " << p(i);
+            } else {
+                const bool ok = vv[i] == Vec3::Constant(kSentinel) && rr[i] == kSentinel && pp[i] == kSentinel;
+                bad += !ok;
+                EXPECT_TRUE(ok) << "row " << i << " written (drifted " << int(in[i]) << ")";
+            }
+        }
+    }
+};
+
+}  // namespace
+
+TEST(Drift, PositionsOfEveryRowBehindTheClock) {
+    Fixture f;
+    run_system(DriftSystem(), f.w);
+    const auto x = f.w.fluid.store.get(comp::position);
+    double worst = 0;
+    for (std::size_t i = 0; i < x.size(); ++i) {
+        if (f.t_last[i] == kNow) {
+            ASSERT_EQ(x[i], f.x0[i]) << "row " << i << " is current: left as it was";
+            continue;
+        }
+        worst = std::max(worst, (x[i].cast<double>() - f.x(i)).norm());
+    }
+    EXPECT_LT(worst, 1e-9 + 2e-7 * 0.4);  // float positions of <= 0.4 m: a few ulps
+    EXPECT_GT(x.size(), 10000u);
+    // Nothing else written.
+    EXPECT_EQ(f.w.fluid.store.get(comp::velocity)[1], Vec3::Constant(kSentinel));
+}
+
+TEST(Drift, RowsAreTheActiveRowsAndTheirNeighbours) {
+    Fixture f;
+    const std::size_t n = f.w.fluid.size();
+    std::mt19937 rng(3);
+    for (const std::size_t m : {std::size_t(5), n / 100, n / 10, n / 2}) {
+        f.reset_outputs();
+        std::vector<Index> all(n);
+        for (std::size_t i = 0; i < n; ++i) all[i] = Index(i);
+        std::shuffle(all.begin(), all.end(), rng);
+        f.w.active_set.assign(all.begin(), all.begin() + std::ptrdiff_t(m));
+        std::sort(f.w.active_set.begin(), f.w.active_set.end());
+        std::set<Index> want(f.w.active_set.begin(), f.w.active_set.end());
+        for (Index i : f.w.active_set)
+            for (Index j : f.w.fluid_neighbours.of(i)) want.insert(j);
+        DriftRowsSystem sys;
+        run_system(sys, f.w);
+        EXPECT_EQ(f.w.drifted, std::vector<Index>(want.begin(), want.end())) << m << " active rows";
+        f.expect_rows(f.w.drifted);
+        // A second step with the same set finds the claim marks cleared.
+        f.reset_outputs();
+        run_system(sys, f.w);
+        EXPECT_EQ(f.w.drifted.size(), want.size()) << m << " active rows, second run";
+    }
+}
+
+TEST(Drift, AllRowsAndTheSynchroniseHook) {
+    Fixture f;
+    run_system(DriftRowsSystem(true), f.w);
+    std::vector<Index> every(f.w.fluid.size());
+    for (std::size_t i = 0; i < every.size(); ++i) every[i] = Index(i);
+    f.expect_rows(every);
+    f.reset_outputs();
+    ASSERT_TRUE(bool(f.w.synchronise));
+    f.w.synchronise(f.w);
+    f.expect_rows(every);
+    const auto x = f.w.fluid.store.get(comp::position);
+    for (std::size_t i = 0; i < x.size(); ++i)
+        if (f.t_last[i] != kNow) ASSERT_LT((x[i].cast<double>() - f.x(i)).norm(), 1e-9 + 2e-7 * 0.4) << "row " << i;
+}
