@@ -1,4 +1,4 @@
-// BM_Binned/<system>/<particles>/<active per mille>: the systems of binned stepping
+// BM_Binned_<system>/<particles>/<active per mille>: the systems of binned stepping
 // (systems/timestep/binned_step_system.hpp) on a jittered lattice where a given, scattered share
 // of the particles is due. The pipeline runs once in recipe order outside the timed loop; each
 // iteration restores the state the measured system changes (the bins, ends, timeline and
@@ -14,6 +14,7 @@
 #include "systems/density/density_system.hpp"
 #include "systems/forces/forces_system.hpp"
 #include "systems/integrate/async_integration_system.hpp"
+#include "systems/integrate/drift_system.hpp"
 #include "systems/metrics/step_stats_system.hpp"
 #include "systems/neighbours/fluid_grid_system.hpp"
 #include "systems/neighbours/fluid_neighbours_system.hpp"
@@ -34,14 +35,17 @@ struct Pipeline {
 
     Pipeline(std::size_t n, double share) : w(bench::lattice_world(n)) {
         const SteppingParams& st = w->scene.simulation.stepping;
+        // The recipe's order (systems/methods/wcsph.cpp, no boundary).
+        systems.push_back(std::make_unique<DriftSystem>());
         systems.push_back(std::make_unique<BinnedSelectSystem>(st.dt_min, st.dt_max));
         systems.push_back(std::make_unique<FluidGridSystem>());
         systems.push_back(std::make_unique<FluidNeighbourSystem>(true, false));
+        systems.push_back(std::make_unique<DriftRowsSystem>());
         systems.push_back(std::make_unique<DensitySystem>(false, true));
         systems.push_back(std::make_unique<ForcesSystem>(false, true));
         systems.push_back(std::make_unique<StepStatsSystem>(true, StepStatsSystem::Rows::Active));
         systems.push_back(std::make_unique<BinnedStepSystem>(st.dt_min, st.dt_max));
-        systems.push_back(std::make_unique<AsyncIntegrationSystem>());
+        systems.push_back(std::make_unique<AsyncIntegrationSystem>(true));
         for (auto& s : systems) s->register_components(*w);
         for (auto& s : systems) run_system(*s, *w);  // t = 0: every particle due
         // Then a scattered share is due at quantum 4 (bin 2) and the rest at 8 (bin 3), so the
@@ -71,7 +75,7 @@ struct Pipeline {
         auto& buckets = w->resources.get<DueBuckets>(res::due_buckets.name);
         buckets.layout = ~std::uint64_t(0);
         w->clock.t_ticks = ticks_of(tl, 4);
-        run_system(*systems.front(), *w);  // select: the active set and the refiled buckets
+        run_system(get("binned_select"), *w);  // the active set and the refiled buckets
         buckets0 = buckets;
     }
     System& get(const std::string& name) {
@@ -138,9 +142,11 @@ void args(benchmark::internal::Benchmark* b) {
     static void BM_Binned_##system(benchmark::State& state) { bench_named(state, #system); } \
     BENCHMARK(BM_Binned_##system)->Apply(args)
 
+SPH_BINNED_BENCH(drift);
 SPH_BINNED_BENCH(binned_select);
 SPH_BINNED_BENCH(fluid_grid);
 SPH_BINNED_BENCH(fluid_neighbours);
+SPH_BINNED_BENCH(drift_rows);
 SPH_BINNED_BENCH(density);
 SPH_BINNED_BENCH(forces);
 SPH_BINNED_BENCH(step_stats);

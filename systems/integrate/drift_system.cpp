@@ -152,30 +152,8 @@ void DriftRowsSystem::run(Context& ctx) {
         }
         return;
     }
-    if (64 * set.size() < n) {
-        // Few: each row claimed by the first task that meets it (an atomic byte), then sorted.
-        tbb::enumerable_thread_specific<std::vector<Index>> found;
-        auto claim = [&](Index j, std::vector<Index>& out) {
-            std::atomic_ref<std::uint8_t> mark(m_mark[j]);
-            if (mark.load(std::memory_order_relaxed) == 0 && mark.exchange(1, std::memory_order_relaxed) == 0)
-                out.push_back(j);
-        };
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, set.size(), 256), [&](const auto& r) {
-            auto& out = found.local();
-            for (std::size_t k = r.begin(); k < r.end(); ++k) {
-                claim(set[k], out);
-                for (Index j : lists.of(set[k])) claim(j, out);
-            }
-        });
-        for (const auto& part : found) rows.insert(rows.end(), part.begin(), part.end());
-        std::sort(rows.begin(), rows.end());
-        for (Index i : rows) {
-            drift(i);
-            m_mark[i] = 0;
-        }
-        return;
-    }
-    // Between: mark (a relaxed byte store), then one scan of the marks collects them in order.
+    // More: mark (a relaxed byte store: no read-modify-write), then one scan of the marks (a
+    // byte a row, cheaper than sorting the claims once they are thousands) collects them in order.
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, set.size(), 256), [&](const auto& r) {
         for (std::size_t k = r.begin(); k < r.end(); ++k) {
             std::atomic_ref<std::uint8_t>(m_mark[set[k]]).store(1, std::memory_order_relaxed);

@@ -8,7 +8,7 @@
 // * DriftRowsSystem writes velocity, density and pressure of exactly the active rows and their
 //   fluid neighbours (lists built by FluidNeighbourSystem, which NeighbourSearch tests against
 //   brute force), lists them ascending in res::drifted, and leaves every other row's bits as
-//   they were; at 5, n/100, n/10 and n/2 active rows (each of its paths), and with `all`;
+//   they were; at 5, n/100, n/10 and n/2 active rows (its three paths), and with `all`;
 // * drift_fluid (World::synchronise) brings every behind row's four columns to the clock.
 // Tolerance: 2e-6 relative to the value's scale (float arithmetic of a few roundings); positions
 // within 1e-9 + 8e-8 m (a few ulps of 0.4 m), where a wrong term, e.g. v_last for v in line 21,
