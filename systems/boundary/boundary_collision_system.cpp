@@ -16,6 +16,7 @@
 #include "engine/data/motion.hpp"
 #include "engine/data/world.hpp"
 #include "engine/graph/context.hpp"
+#include "systems/integrate/drift.hpp"
 
 namespace sph {
 
@@ -24,7 +25,10 @@ Access BoundaryCollisionSystem::access() const {
         .write(fluid(comp::position), fluid(comp::velocity), fluid(comp::wake), counter::collisions)
         .write_if(m_active_rows, res::collided)
         .read_if(m_active_rows, res::active_set)
-        .read_if(m_moving, res::dt)  // the body's position at the step's end
+        .read_if(m_moving || m_active_rows, res::dt)  // the body's position at the step's end
+        // binned: the end state of an active row from its base (it is not advanced before)
+        .read_if(m_active_rows, fluid(comp::position_last), fluid(comp::velocity_last), fluid(comp::acceleration),
+                 fluid(comp::t_last))
         .read_if(m_count_droplets, res::fluid_neighbours)
         .write_if(m_count_droplets, counter::droplet_contacts);
     if (m_active_rows) a.rows(res::active_set);
@@ -145,24 +149,47 @@ void BoundaryCollisionSystem::run(Context& ctx) {
     struct Count {
         std::uint64_t hits = 0, droplets = 0;
     };
+    // Binned stepping: an active row holds its state at the step's start and its new base; its
+    // state at the step's end is He Alg. 2 lines 19-21 from that base (written only if netted;
+    // otherwise the next step's drift computes the same values).
+    std::span<const Vec3> x0, v0, acc;
+    std::span<const std::int64_t> t_last;
+    Tick t_end = 0;
+    if (m_active_rows) {
+        x0 = ctx.read(fluid(comp::position_last));
+        v0 = ctx.read(fluid(comp::velocity_last));
+        acc = ctx.read(fluid(comp::acceleration));
+        t_last = ctx.read(fluid(comp::t_last));
+        t_end = ctx.clock().t_ticks + ctx.read(res::dt).dt_ticks;
+    }
     const Count total = tbb::parallel_reduce(
         tbb::blocked_range<std::size_t>(0, rows ? rows->size() : x.size(), 4096), Count{},
         [&](const auto& r, Count count) {
             for (std::size_t k = r.begin(); k < r.end(); ++k) {
                 const std::size_t i = rows ? (*rows)[k] : k;
+                Vec3 xi = x[i], vi = v[i];
+                if (m_active_rows) {
+                    const Real dt = drift_interval(t_end, t_last[i]);
+                    vi = drifted_velocity(v0[i], acc[i], dt);
+                    xi = drifted_position(x0[i], vi, dt);
+                }
                 bool hit = false;
                 if (!any_moving) {
-                    for (const auto& b : boundaries) hit |= collide(b, x[i], v[i]);
+                    for (const auto& b : boundaries) hit |= collide(b, xi, vi);
                 } else {
                     for (std::size_t j = 0; j < boundaries.size(); ++j) {
                         // Reflect/clamp the velocity relative to the body (Ihmsen 2010 eq. 11-12
                         // in the body's frame), then return to the world frame.
-                        Vec3 rel = v[i] - body_velocity[j];
-                        if (collide(boundaries[j], x[i], rel)) {
-                            v[i] = rel + body_velocity[j];
+                        Vec3 rel = vi - body_velocity[j];
+                        if (collide(boundaries[j], xi, rel)) {
+                            vi = rel + body_velocity[j];
                             hit = true;
                         }
                     }
+                }
+                if (hit) {
+                    x[i] = xi;
+                    v[i] = vi;
                 }
                 // Individual stepping: the corrected state must become the particle's base
                 // state, so it is evaluated at the next step (SelectActiveSystem reads wake).

@@ -16,14 +16,16 @@
 namespace sph {
 
 Access AsyncIntegrationSystem::access() const {
-    Access a = Access()
+    if (m_active_only)  // the kick only: the active rows' new base state
+        return Access()
+            .read(res::active_set, fluid(comp::position), fluid(comp::velocity))
+            .write(fluid(comp::position_last), fluid(comp::velocity_last))
+            .rows(res::active_set);
+    return Access()
         .read(fluid(comp::acceleration), fluid(comp::active), fluid(comp::t_last), fluid(comp::drho_dt),
               fluid(comp::density_last), res::dt)
-        .read_if(m_active_only, res::active_set)
         .write(fluid(comp::velocity), fluid(comp::position), fluid(comp::position_last), fluid(comp::velocity_last),
                fluid(comp::density), fluid(comp::pressure));
-    if (m_active_only) a.rows(res::active_set);
-    return a;
 }
 
 void AsyncIntegrationSystem::register_components(World& w) {
@@ -36,6 +38,22 @@ void AsyncIntegrationSystem::register_components(World& w) {
 }
 
 void AsyncIntegrationSystem::run(Context& ctx) {
+    if (m_active_only) {
+        // Evaluated now: the state at t_sim becomes the base the row is drifted from (lines
+        // 19-21 with t_last = t_sim), by the next step's drift or the collision net.
+        const auto x = ctx.read(fluid(comp::position));
+        const auto v = ctx.read(fluid(comp::velocity));
+        auto x0 = ctx.write(fluid(comp::position_last));
+        auto v0 = ctx.write(fluid(comp::velocity_last));
+        const auto& set = ctx.read(res::active_set);
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, set.size(), 4096), [&](const auto& r) {
+            for (std::size_t k = r.begin(); k < r.end(); ++k) {
+                x0[set[k]] = x[set[k]];
+                v0[set[k]] = v[set[k]];
+            }
+        });
+        return;
+    }
     auto x = ctx.write(fluid(comp::position));
     auto v = ctx.write(fluid(comp::velocity));
     auto x0 = ctx.write(fluid(comp::position_last));
@@ -60,13 +78,6 @@ void AsyncIntegrationSystem::run(Context& ctx) {
         rho[i] = drifted_density(rho0[i], drho[i], dt);     // line 9, at the new time
         p[i] = tait_pressure(rho[i], rest, b);
     };
-    if (m_active_only) {
-        const auto& set = ctx.read(res::active_set);
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, set.size(), 4096), [&](const auto& r) {
-            for (std::size_t k = r.begin(); k < r.end(); ++k) advance(set[k]);
-        });
-        return;
-    }
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 4096), [&](const auto& r) {
         for (std::size_t i = r.begin(); i < r.end(); ++i) advance(i);
     });

@@ -11,9 +11,9 @@ namespace sph {
 
 class AsyncIntegrationSystem final : public System {
 public:
-    /// @param active_only binned stepping's lazy drift: the active rows only (their new base
-    /// state and their state at the new time, which the collision net reads); the sleeping
-    /// rows are drifted when a step reads them (DriftSystem, DriftRowsSystem) or by
+    /// @param active_only binned stepping's lazy drift: the active rows' new base state only
+    /// (x_last = x, v_last = v at t_sim); every row is brought to a later time from its base
+    /// when a step reads it (DriftSystem, DriftRowsSystem, the collision net) or by
     /// World::synchronise.
     explicit AsyncIntegrationSystem(bool active_only = false) : m_active_only(active_only) {}
     std::string name() const override { return "async_integrate"; }

@@ -124,8 +124,10 @@ void DriftRowsSystem::run(Context& ctx) {
     rows.clear();
     const std::size_t n = v.size();
     const auto& set = m_all ? rows : ctx.read(res::active_set);
-    if (m_all || 4 * set.size() >= n) {
-        // Most rows are read anyway: every row, in one streaming pass.
+    if (m_all || 128 * set.size() >= n) {
+        // Every row, in one streaming pass: from n/128 active rows on, their lists reach a large
+        // share of the rows (up to 30 or 40 each where the active rows are scattered), and
+        // marking and drifting those at random costs more than streaming through all.
         rows.resize(n);
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, kGrain), [&](const auto& r) {
             for (std::size_t i = r.begin(); i < r.end(); ++i) {
