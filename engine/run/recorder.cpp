@@ -298,14 +298,19 @@ void Recorder::write_collection(const World& w) const {
     if (w.boundary.size() > w.static_boundary_end) collection("boundary/moving", "boundary_moving.pvd");
 }
 
+bool Recorder::front_due(const World& w) const {
+    return m_fronts.size() < 3 && w.clock.t >= 0.25 * double(m_fronts.size() + 1) * w.scene.simulation.end_time - 1e-9;
+}
+
+bool Recorder::frame_due(const World& w) const {
+    return w.scene.simulation.frame_rate > 0 && w.clock.t >= m_next_frame_time - 1e-9;
+}
+
 bool Recorder::reads_particles(const Simulation& sim) const {
-    // The conditions under which after_step calls front_x, sample_due and write_frame.
+    // after_step reads particles only through front_x, sample_due and write_frame.
     const World& w = sim.world();
-    const double t = w.clock.t, end = w.scene.simulation.end_time, rate = w.scene.simulation.frame_rate;
     if (sim.last().rolled_back) return false;
-    if (m_fronts.size() < 3 && t >= 0.25 * double(m_fronts.size() + 1) * end - 1e-9) return true;
-    if (rate > 0 && t >= m_next_frame_time - 1e-9) return true;
-    return m_probes.any_due(t);
+    return front_due(w) || frame_due(w) || m_probes.any_due(w.clock.t);
 }
 
 void Recorder::after_step(const Simulation& sim) {
@@ -346,13 +351,9 @@ void Recorder::after_step(const Simulation& sim) {
     m_dt_max = std::max(m_dt_max, dt_taken);
     m_rho_err_max = std::max(m_rho_err_max, st.rho_err_max);
     ++m_steps;
-    const double t = w.clock.t;
-    const double end = w.scene.simulation.end_time;
-    while (m_fronts.size() < 3 && t >= 0.25 * double(m_fronts.size() + 1) * end - 1e-9)
-        m_fronts.emplace_back(t, front_x(w));
+    while (front_due(w)) m_fronts.emplace_back(w.clock.t, front_x(w));
     m_probes.sample_due(w);
-    const double rate = w.scene.simulation.frame_rate;
-    if (rate > 0 && t >= m_next_frame_time - 1e-9) {
+    if (frame_due(w)) {
         write_frame(sim);
     } else if (m_pending.size() > kMaxPendingStats) {
         flush_stats();

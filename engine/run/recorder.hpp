@@ -66,6 +66,9 @@ public:
                                      int threads);
 
 private:
+    /// after_step's particle reads, one predicate each (reads_particles is their union).
+    bool front_due(const World& w) const;
+    bool frame_due(const World& w) const;
     std::string m_interrupted;  ///< why the run stopped early ("" when it reached its end)
     std::string m_output_failed;  ///< the output error salvage() was called for
     void reserve_space();
