@@ -32,8 +32,12 @@ void StepStatsSystem::run(Context& ctx) {
     const double rho0 = ctx.physics().rest_density;
     const NeighbourLists& lists = ctx.read(res::fluid_neighbours);
     // Individual stepping: neighbour pairs and the updated count are those of the active set.
-    const std::uint8_t* is_active = m_individual ? ctx.read(fluid(comp::active)).data() : nullptr;
+    // Over the active set every row read is active, so the flag is only read over all rows.
     const std::vector<Index>* rows = m_rows == Rows::Active ? &ctx.read(res::active_set) : nullptr;
+    const std::uint8_t* is_active = m_individual && !rows ? ctx.read(fluid(comp::active)).data() : nullptr;
+    // A set of every row is 0..n-1 (the set is ascending and unique): read it as every row,
+    // the same sums in the same order without the gather.
+    if (rows && rows->size() == rho.size()) rows = nullptr;
     const std::size_t n = rows ? rows->size() : rho.size();
     // Deterministic reduction: the same sums whatever the thread count.
     const Acc r = tbb::parallel_deterministic_reduce(

@@ -166,3 +166,62 @@ TEST(StepStats, IndividualCountsActiveParticlesOnly) {
     EXPECT_NEAR(w.stats.v_max, ref.v_max, 1e-6 * ref.v_max);
     EXPECT_EQ(w.stats.a_max_particle, ref.a_arg);
 }
+
+// Binned stepping (Rows::Active): statistics and counts over the active set only, against a
+// brute force over the same rows (tolerances as above); a set of every row reads as every row
+// (no gather) and must then give what StepStatsSystem(false) gives, to the last bit.
+TEST(StepStats, ActiveRowsMatchBruteForceAndTheWholeSetMatchesGlobal) {
+    Block b(41);
+    World& w = b.w;
+    const std::size_t n = w.fluid.size();
+    auto act = w.fluid.store.add(comp::active);
+    std::vector<std::uint8_t> active(n, 0);
+    std::mt19937 rng(5);
+    const Index largest = brute_force(w).a_arg;  // left out, so that a_max must come from the set
+    for (std::size_t i = 0; i < n; ++i)
+        if (rng() % 4 == 0 && Index(i) != largest) active[i] = act[i] = 1, w.active_set.push_back(Index(i));
+    const std::size_t k = w.active_set.size();
+    ASSERT_GT(k, n / 5);
+    ASSERT_LT(k, n / 3);
+    const Reference all = brute_force(w, &active);  // its pair count is the active rows'
+    const auto v = w.fluid.store.get(comp::velocity);
+    const auto a = w.fluid.store.get(comp::acceleration);
+    const auto rho = w.fluid.store.get(comp::density);
+    double err_sum = 0, err_max = 0, v_max = 0, a_max = 0;
+    Index a_arg = 0;
+    for (Index i : w.active_set) {
+        const double e = std::max(double(rho[i]) / w.physics.rest_density - 1.0, 0.0);
+        err_sum += e;
+        err_max = std::max(err_max, e);
+        v_max = std::max(v_max, v[i].cast<double>().norm());
+        if (a[i].cast<double>().norm() > a_max) a_max = a[i].cast<double>().norm(), a_arg = i;
+    }
+    ASSERT_LT(a_max, all.a_max * (1 - 1e-5)) << "the subset must miss the largest |a| for the test to tell";
+    w.counters.clear();
+    w.counters["active"] = k;
+    run_system(StepStatsSystem(false, StepStatsSystem::Rows::Active), w);
+    EXPECT_EQ(w.counter_value("updated"), k);
+    EXPECT_EQ(w.counter_value("neighbour_pairs"), all.pairs);
+    EXPECT_NEAR(w.stats.rho_err_avg, err_sum / double(k), 1e-12 * err_sum / double(k));
+    EXPECT_DOUBLE_EQ(w.stats.rho_err_max, err_max);
+    EXPECT_NEAR(w.stats.v_max, v_max, 1e-6 * v_max);
+    EXPECT_NEAR(w.stats.a_max, a_max, 1e-6 * a_max);
+    EXPECT_EQ(w.stats.a_max_particle, a_arg);
+
+    // Every row active: the same bits as the whole-fluid statistics.
+    w.active_set.clear();
+    for (std::size_t i = 0; i < n; ++i) act[i] = 1, w.active_set.push_back(Index(i));
+    w.counters.clear();
+    w.counters["active"] = n;
+    run_system(StepStatsSystem(false, StepStatsSystem::Rows::Active), w);
+    const StepStats binned = w.stats;
+    const std::uint64_t binned_pairs = w.counter_value("neighbour_pairs");
+    w.counters.clear();
+    run_system(StepStatsSystem(false), w);
+    EXPECT_EQ(binned.rho_err_avg, w.stats.rho_err_avg);
+    EXPECT_EQ(binned.rho_err_max, w.stats.rho_err_max);
+    EXPECT_EQ(binned.v_max, w.stats.v_max);
+    EXPECT_EQ(binned.a_max, w.stats.a_max);
+    EXPECT_EQ(binned.a_max_particle, w.stats.a_max_particle);
+    EXPECT_EQ(binned_pairs, w.counter_value("neighbour_pairs"));
+}
