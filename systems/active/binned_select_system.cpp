@@ -137,40 +137,34 @@ void BinnedSelectSystem::run(Context& ctx) {
                         std::atomic_ref<std::uint8_t>(active[rows[k]]).store(1, std::memory_order_relaxed);
             });
         }
+        // The same pass tests the other rows against the moving bodies: a row within reach is
+        // due now (its step so far ends here), on the largest bin `now` allows; its entry at
+        // the old end goes stale. Rows are independent, so chunks run in parallel, each
+        // collecting its rows ascending.
+        const bool near_bodies = !bodies.empty();
+        const auto x = near_bodies ? ctx.read(fluid(comp::position)) : std::span<const Vec3>{};
+        const auto dt = near_bodies ? ctx.read(fluid(comp::dt)) : std::span<const double>{};
+        const Real h = ctx.physics().h;
         const std::size_t chunks = (n + kScanChunk - 1) / kScanChunk;
         std::vector<std::vector<Index>> parts(chunks);
+        std::vector<int> lowest(chunks, buckets.bin_lo);
         tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t c) {
             auto& out = parts[c];
-            for (std::size_t i = c * kScanChunk, e = std::min(n, i + kScanChunk); i < e; ++i)
-                if (active[i]) out.push_back(Index(i));
-        });
-        for (const auto& part : parts) set.insert(set.end(), part.begin(), part.end());
-        if (!bodies.empty()) {
-            // Within reach of a moving body: due now (its step so far ends here), on the largest
-            // bin `now` allows. Its entry at the old end goes stale. Rows are independent, so
-            // the scan runs in parallel chunks, each collecting its rows ascending.
-            const auto x = ctx.read(fluid(comp::position));
-            const auto dt = ctx.read(fluid(comp::dt));
-            const Real h = ctx.physics().h;
-            std::vector<int> lowest(chunks, buckets.bin_lo);
-            tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t c) {
-                auto& out = parts[c];
-                out.clear();
-                for (std::size_t i = c * kScanChunk, e = std::min(n, i + kScanChunk); i < e; ++i) {
-                    if (active[i] || !near_moving_body(bodies, x[i], dt[i], h)) continue;
+            for (std::size_t i = c * kScanChunk, e = std::min(n, i + kScanChunk); i < e; ++i) {
+                if (active[i]) {
+                    out.push_back(Index(i));
+                } else if (near_bodies && near_moving_body(bodies, x[i], dt[i], h)) {
                     ti_end[i] = tl.now;
                     bin[i] = std::uint8_t(std::min<int>(bin[i], top));
                     lowest[c] = std::min<int>(lowest[c], bin[i]);
                     active[i] = 1;
                     out.push_back(Index(i));
                 }
-            });
-            const std::size_t flagged = set.size();
-            for (std::size_t c = 0; c < chunks; ++c) {
-                set.insert(set.end(), parts[c].begin(), parts[c].end());
-                buckets.bin_lo = std::min(buckets.bin_lo, lowest[c]);
             }
-            std::inplace_merge(set.begin(), set.begin() + std::ptrdiff_t(flagged), set.end());
+        });
+        for (std::size_t c = 0; c < chunks; ++c) {
+            set.insert(set.end(), parts[c].begin(), parts[c].end());
+            buckets.bin_lo = std::min(buckets.bin_lo, lowest[c]);
         }
     }
     if (filed) buckets.due.erase(due);

@@ -91,15 +91,16 @@ void BinnedStepSystem::run(Context& ctx) {
     const std::uint64_t now = tl.now;
     if (!set.empty()) {
         // 1. Raw bins, with the growth rule (at t = 0 every bin is aligned and any is allowed),
-        // and the rows that can break a rule: bin_i > lo + 2 (the limiter may lower it; every
-        // bin is >= lo) or bin_i + 2 < hi (it may wake a sleeping neighbour; every bin is <= hi).
-        // A row held back by the growth rule keeps a bin >= its old one, so lo = min(old bound,
-        // bin of the shortest raw step) bounds every bin from below. The order of the list does
-        // not change the result.
+        // and the rows that can break the rule: the limiter visits bin_i > lo + 2 (every bin is
+        // >= lo); the wake-up visits bin_i + 2 < hi (every bin is <= hi) and every row the
+        // limiter may lower. A row held back by the growth rule keeps a bin >= its old one, so
+        // lo = min(old bound, bin of the shortest raw step) bounds every bin from below. The
+        // order of either list does not change the result.
         buckets.bin_lo = std::min(buckets.bin_lo, tl.bin_for(s.dt_stable));
         const int lo = buckets.bin_lo, hi = buckets.bin_hi;
-        tbb::enumerable_thread_specific<std::vector<Index>> wake_rows;
+        tbb::enumerable_thread_specific<std::vector<Index>> limit_rows, wake_rows;
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, set.size(), kGrain), [&](const auto& r) {
+            auto& lim = limit_rows.local();
             auto& wak = wake_rows.local();
             for (std::size_t k = r.begin(); k < r.end(); ++k) {
                 const Index i = set[k];
@@ -109,47 +110,64 @@ void BinnedStepSystem::run(Context& ctx) {
                     if (b > old) b = BinTimeline::aligned(now, old + 1) ? old + 1 : old;
                 }
                 bin[i] = std::uint8_t(b);
-                if (b > lo + 2 || b + 2 < hi) wak.push_back(i);
+                const bool limited = b > lo + 2;
+                if (limited) lim.push_back(i);
+                if (limited || b + 2 < hi) wak.push_back(i);
             }
         });
+        m_limit.clear();
         m_wake.clear();
+        for (auto& v : limit_rows) m_limit.insert(m_limit.end(), v.begin(), v.end());
         for (auto& v : wake_rows) m_wake.insert(m_wake.end(), v.begin(), v.end());
         tbb::enumerable_thread_specific<std::vector<Index>> woken;
-        // 2-3. The limiter and the wake-up to their common fixed point, in one pass over each
-        // candidate's list: first its own bin is lowered to its neighbours' smallest + 2 (the
-        // limiter; for a row at most lo + 2 it cannot change), then every
-        // sleeping neighbour above the new bin + 2 is lowered to it (the wake-up). Both only
-        // lower a bin that breaks a rule, and only to the bound that rule sets, so any order of
-        // them reaches the same fixed point (the largest bins below the raw ones that satisfy
-        // both rules), the one a limiter to its fixed point, then a wake-up, repeated, reaches.
-        // Passes repeat until one changes nothing; a step usually takes one or two.
-        auto load_bin = [&](std::uint8_t& b) { return std::atomic_ref<std::uint8_t>(b).load(std::memory_order_relaxed); };
-        while (!m_wake.empty()) {
-            ++passes;
-            const bool changed = tbb::parallel_reduce(
+        // The limiter to its fixed point; true when it lowered a bin.
+        auto limit = [&] {
+            bool any_change = false;
+            while (!m_limit.empty()) {
+                ++passes;
+                const bool changed = tbb::parallel_reduce(
+                    tbb::blocked_range<std::size_t>(0, m_limit.size(), kGrain), false,
+                    [&](const auto& r, bool any) {
+                        for (std::size_t k = r.begin(); k < r.end(); ++k) {
+                            const Index i = m_limit[k];
+                            int lo = std::atomic_ref<std::uint8_t>(bin[i]).load(std::memory_order_relaxed);
+                            for (Index j : lists.of(i))
+                                lo = std::min<int>(lo, std::atomic_ref<std::uint8_t>(bin[j]).load(std::memory_order_relaxed) + 2);
+                            any |= atomic_lower(bin[i], std::uint8_t(lo));
+                        }
+                        return any;
+                    },
+                    [](bool a, bool b) { return a || b; });
+                if (!changed) break;
+                any_change = true;
+            }
+            return any_change;
+        };
+        // One wake-up pass; true when it lowered a sleeping bin.
+        auto wake = [&] {
+            return !m_wake.empty() && tbb::parallel_reduce(
                 tbb::blocked_range<std::size_t>(0, m_wake.size(), kGrain), false,
                 [&](const auto& r, bool any) {
                     auto& out = woken.local();
                     for (std::size_t k = r.begin(); k < r.end(); ++k) {
                         const Index i = m_wake[k];
-                        const auto nb = lists.of(i);
-                        int own = load_bin(bin[i]);
-                        int lo = own;
-                        for (Index j : nb) lo = std::min<int>(lo, load_bin(bin[j]) + 2);
-                        if (lo < own && atomic_lower(bin[i], std::uint8_t(lo))) any = true;
-                        const int cap = load_bin(bin[i]) + 2;
-                        for (Index j : nb)
-                            // An active j above cap is lowered by its own limiter, so the
-                            // activity flag is read only for the rare candidates.
-                            if (load_bin(bin[j]) > cap && !active[j] && atomic_lower(bin[j], std::uint8_t(cap))) {
+                        const int cap = bin[i] + 2;
+                        for (Index j : lists.of(i))
+                            // An active j never exceeds cap (the limiter's fixed point), so
+                            // the activity flag is read only for the rare candidates.
+                            if (bin[j] > cap && !active[j] && atomic_lower(bin[j], std::uint8_t(cap))) {
                                 out.push_back(j);
                                 any = true;
                             }
                     }
                     return any;
                 },
-                [](bool x, bool y) { return x || y; });
-            if (!changed) break;
+                [](bool a, bool b) { return a || b; });
+        };
+        // Wake-up leaves the active bins as they are, so after it only a limiter pass that
+        // changes an active bin (bounded by a newly lowered sleeping one) calls for another.
+        limit();
+        while (wake() && limit()) {
         }
         // 4. New ends. Active particles: a whole step of their bin from now, filed by bin (at
         // most max_bin + 1 buckets touched, each appended once, in ascending row order). Woken

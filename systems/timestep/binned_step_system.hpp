@@ -15,9 +15,7 @@
 ///    its step cut to end at the first multiple of that bin's step after now. Its state is
 ///    extrapolated from its last evaluation (He Alg. 2 lines 19-21), so the cut holds no
 ///    acceleration past the new end. A lowered sleeping bin may in turn bound an active one,
-///    so steps 2-3 repeat to their common fixed point (again unique: both rules only lower a
-///    bin to the bound they set), one pass over each candidate's list doing both, until a
-///    pass changes nothing.
+///    so steps 2-3 repeat until a wake-up pass changes nothing.
 /// 4. Every active and woken particle is filed under its new end; the next step ends at the
 ///    earliest end with a live entry (stale entries of woken particles are dropped there),
 ///    clipped to the run's end and frame times by the engine.
@@ -57,7 +55,7 @@ private:
     };
     double m_dt_min, m_dt_max, m_headroom;
     tbb::enumerable_thread_specific<Filed> m_filed;
-    std::vector<Index> m_wake;  ///< active rows the limiter and the wake-up must visit
+    std::vector<Index> m_limit, m_wake;           ///< active rows the limiter / wake-up must visit
 };
 
 }  // namespace sph
