@@ -2,11 +2,7 @@
 // `ti_end == ti_current`, here per particle and without a scan of all particles).
 #include "systems/active/binned_select_system.hpp"
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-
 #include <algorithm>
-#include <atomic>
 
 #include "engine/data/components.hpp"
 #include "engine/data/world.hpp"
@@ -17,11 +13,6 @@
 namespace sph {
 
 namespace {
-
-/// From this many rows the last step's flags are cleared in parallel.
-constexpr std::size_t kManyRows = 4096;
-constexpr std::size_t kGrain = 4096;
-constexpr std::size_t kScanChunk = 16384;
 
 /// Sorts a sequence made of a few ascending runs (a bucket is appended to once per step that
 /// files into it) by merging neighbouring runs: O(n log runs).
@@ -96,78 +87,39 @@ void BinnedSelectSystem::run(Context& ctx) {
         buckets.bin_lo = n ? *lo : 0;
         buckets.bin_hi = n ? *hi : 0;
         buckets.layout = layout;
-    } else if (set.size() < kManyRows) {
-        for (Index i : set) active[i] = 0;  // the last step's flags
     } else {
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, set.size(), kGrain), [&](const auto& r) {
-            for (std::size_t k = r.begin(); k < r.end(); ++k) active[set[k]] = 0;
-        });
+        for (Index i : set) active[i] = 0;  // the last step's flags
     }
     set.clear();
-    if (ctx.clock().t_ticks != ticks_of(tl, tl.next)) {
-        ctx.write(counter::active) = 0;
-        return;
-    }
-    tl.now = tl.next;
-    const auto due = buckets.due.find(tl.now);
-    const std::size_t filed = due == buckets.due.end() ? 0 : due->second.size();
-    const auto& bodies = ctx.read(res::moving_bodies);
-    const int top = BinTimeline::largest_aligned_bin(tl.now, tl.max_bin);
-    if (16 * filed < n && bodies.empty()) {
-        // Under 1/16 of the rows: the bucket's ascending runs, merged (O(rows log runs), no pass
-        // over every row).
-        if (filed) {
-            for (Index i : due->second)
+    if (ctx.clock().t_ticks == ticks_of(tl, tl.next)) {
+        tl.now = tl.next;
+        if (auto it = buckets.due.find(tl.now); it != buckets.due.end()) {
+            for (Index i : it->second)
                 if (ti_end[i] == tl.now && !active[i]) {
                     active[i] = 1;
                     set.push_back(i);
                 }
+            buckets.due.erase(it);
+        }
+        const auto& bodies = ctx.read(res::moving_bodies);
+        if (!bodies.empty()) {
+            // Within reach of a moving body: due now (its step so far ends here), on the largest
+            // bin `now` allows. Its entry at the old end goes stale.
+            const auto x = ctx.read(fluid(comp::position));
+            const auto dt = ctx.read(fluid(comp::dt));
+            const Real h = ctx.physics().h;
+            const int top = BinTimeline::largest_aligned_bin(tl.now, tl.max_bin);
+            for (std::size_t i = 0; i < n; ++i) {
+                if (active[i] || !near_moving_body(bodies, x[i], dt[i], h)) continue;
+                ti_end[i] = tl.now;
+                bin[i] = std::uint8_t(std::min<int>(bin[i], top));
+                buckets.bin_lo = std::min<int>(buckets.bin_lo, bin[i]);
+                active[i] = 1;
+                set.push_back(Index(i));
+            }
         }
         sort_runs(set);
-    } else {
-        // A large share of the rows, or a scan of every row for the moving bodies anyway: flag
-        // the due rows (a relaxed byte store; a row filed twice stores the same 1), then one
-        // parallel scan of the flags collects the set ascending, in place of the serial merge
-        // of the bucket's runs.
-        if (filed) {
-            const auto& rows = due->second;
-            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rows.size(), kGrain), [&](const auto& r) {
-                for (std::size_t k = r.begin(); k < r.end(); ++k)
-                    if (ti_end[rows[k]] == tl.now)
-                        std::atomic_ref<std::uint8_t>(active[rows[k]]).store(1, std::memory_order_relaxed);
-            });
-        }
-        // The same pass tests the other rows against the moving bodies: a row within reach is
-        // due now (its step so far ends here), on the largest bin `now` allows; its entry at
-        // the old end goes stale. Rows are independent, so chunks run in parallel, each
-        // collecting its rows ascending.
-        const bool near_bodies = !bodies.empty();
-        const auto x = near_bodies ? ctx.read(fluid(comp::position)) : std::span<const Vec3>{};
-        const auto dt = near_bodies ? ctx.read(fluid(comp::dt)) : std::span<const double>{};
-        const Real h = ctx.physics().h;
-        const std::size_t chunks = (n + kScanChunk - 1) / kScanChunk;
-        std::vector<std::vector<Index>> parts(chunks);
-        std::vector<int> lowest(chunks, buckets.bin_lo);
-        tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t c) {
-            auto& out = parts[c];
-            for (std::size_t i = c * kScanChunk, e = std::min(n, i + kScanChunk); i < e; ++i) {
-                if (active[i]) {
-                    out.push_back(Index(i));
-                } else if (near_bodies && near_moving_body(bodies, x[i], dt[i], h)) {
-                    ti_end[i] = tl.now;
-                    bin[i] = std::uint8_t(std::min<int>(bin[i], top));
-                    lowest[c] = std::min<int>(lowest[c], bin[i]);
-                    active[i] = 1;
-                    out.push_back(Index(i));
-                }
-            }
-        });
-        for (std::size_t c = 0; c < chunks; ++c) {
-            set.insert(set.end(), parts[c].begin(), parts[c].end());
-            buckets.bin_lo = std::min(buckets.bin_lo, lowest[c]);
-        }
     }
-    if (filed) buckets.due.erase(due);
     ctx.write(counter::active) = set.size();
 }
 

@@ -4,10 +4,9 @@
 /// time (BinTimeline::next), the active set is that time's bucket (particles with ti_end ==
 /// now), plus the particles within reach of a moving body (the rule of SelectActiveSystem). A
 /// step that ends at a frame or the run's end between two due times has no active particle.
-/// Cost: O(active) per step (the bucket and the previous step's flags) while under 1/16 of
-/// the rows are due; from 1/16 on, and while a scene has a moving body (whose test scans every
-/// particle), the set is collected by one parallel scan of the flags, O(N / threads). O(N)
-/// also when the fluid rows were reordered, added or restored (the buckets are rebuilt).
+/// Cost: O(active) per step (the bucket and the previous step's flags); O(N) only when the
+/// fluid rows were reordered, added or restored (the buckets are rebuilt from ti_end), and the
+/// moving-body test scans every particle while a scene has a moving body.
 #include "engine/graph/system.hpp"
 
 namespace sph {
