@@ -351,7 +351,9 @@ TEST(BinnedStepping, SelectionAddsTheRowsWithinReachOfAMovingBody) {
         if (!set.empty() && set.size() < n / 16) ++sparse_steps;
         for (std::size_t i = 0; i < n; ++i) {
             const bool due = old_end[i] == start && !set.empty();
-            if (due) ASSERT_TRUE(in[i]) << "due row " << i << " missing at step " << w.clock.step;
+            if (due) {
+                ASSERT_TRUE(in[i]) << "due row " << i << " missing at step " << w.clock.step;
+            }
             if (set.empty() || due) continue;
             const double margin = 2 * step * (body.speed + double(v[i].norm()));
             std::vector<MovingBody> grown{body}, shrunk{body};

@@ -176,5 +176,7 @@ TEST(Drift, AllRowsAndTheSynchroniseHook) {
     f.expect_rows(every);
     const auto x = f.w.fluid.store.get(comp::position);
     for (std::size_t i = 0; i < x.size(); ++i)
-        if (f.t_last[i] != kNow) ASSERT_LT((x[i].cast<double>() - f.x(i)).norm(), 1e-9 + 2e-7 * 0.4) << "row " << i;
+        if (f.t_last[i] != kNow) {
+            ASSERT_LT((x[i].cast<double>() - f.x(i)).norm(), 1e-9 + 2e-7 * 0.4) << "row " << i;
+        }
 }
