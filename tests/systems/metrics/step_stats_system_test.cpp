@@ -57,8 +57,9 @@ struct Reference {
     std::size_t clamped = 0;  // particles with rho < rho0 (zero compression)
 };
 
-// Double precision from the float inputs; `active` (optional) limits the pair count.
-Reference brute_force(const World& w, const std::vector<std::uint8_t>* active = nullptr) {
+// Double precision from the float inputs; `active` (optional) limits the pair count, and with
+// `active_stats` the density error, v_max and a_max too (binned stepping's Rows::Active).
+Reference brute_force(const World& w, const std::vector<std::uint8_t>* active = nullptr, bool active_stats = false) {
     const auto x = w.fluid.store.get(comp::position);
     const auto v = w.fluid.store.get(comp::velocity);
     const auto a = w.fluid.store.get(comp::acceleration);
@@ -66,7 +67,10 @@ Reference brute_force(const World& w, const std::vector<std::uint8_t>* active = 
     const double rho0 = w.physics.rest_density;
     const Real hr = w.physics.h;
     Reference r;
+    std::size_t counted = 0;
     for (std::size_t i = 0; i < x.size(); ++i) {
+        if (active_stats && !(*active)[i]) continue;
+        ++counted;
         const double e = double(rho[i]) / rho0 - 1.0;
         if (e < 0) ++r.clamped;
         r.err_avg += std::max(e, 0.0);
@@ -85,8 +89,19 @@ Reference brute_force(const World& w, const std::vector<std::uint8_t>* active = 
         for (std::size_t j = 0; j < x.size(); ++j)
             if (j != i && (x[i] - x[j]).squaredNorm() < hr * hr) ++r.pairs;
     }
-    r.err_avg /= double(x.size());
+    r.err_avg /= double(counted);
     return r;
+}
+
+// Flags the rows `pick` chooses (called once per row, in order) as active: the `active` column,
+// the world's active set, and the returned flags for brute_force.
+template <class Pick>
+std::vector<std::uint8_t> activate(World& w, Pick pick) {
+    auto column = w.fluid.store.add(comp::active);
+    std::vector<std::uint8_t> active(w.fluid.size(), 0);
+    for (std::size_t i = 0; i < active.size(); ++i)
+        if (pick(Index(i))) active[i] = column[i] = 1, w.active_set.push_back(Index(i));
+    return active;
 }
 
 }  // namespace
@@ -147,12 +162,9 @@ TEST(StepStats, IndividualCountsActiveParticlesOnly) {
     Block b(29);
     World& w = b.w;
     const std::size_t n = w.fluid.size();
-    auto act = w.fluid.store.add(comp::active);
-    std::vector<std::uint8_t> active(n, 0);
     std::mt19937 rng(1);
-    std::size_t k = 0;
-    for (std::size_t i = 0; i < n; ++i)
-        if (rng() % 3 == 0) active[i] = act[i] = 1, w.active_set.push_back(Index(i)), ++k;
+    const std::vector<std::uint8_t> active = activate(w, [&](Index) { return rng() % 3 == 0; });
+    const std::size_t k = w.active_set.size();
     ASSERT_GT(k, n / 4);
     ASSERT_LT(k, n / 2);
     w.counters.clear();
@@ -174,43 +186,29 @@ TEST(StepStats, ActiveRowsMatchBruteForceAndTheWholeSetMatchesGlobal) {
     Block b(41);
     World& w = b.w;
     const std::size_t n = w.fluid.size();
-    auto act = w.fluid.store.add(comp::active);
-    std::vector<std::uint8_t> active(n, 0);
     std::mt19937 rng(5);
     const Index largest = brute_force(w).a_arg;  // left out, so that a_max must come from the set
-    for (std::size_t i = 0; i < n; ++i)
-        if (rng() % 4 == 0 && Index(i) != largest) active[i] = act[i] = 1, w.active_set.push_back(Index(i));
+    const std::vector<std::uint8_t> active = activate(w, [&](Index i) { return rng() % 4 == 0 && i != largest; });
     const std::size_t k = w.active_set.size();
     ASSERT_GT(k, n / 5);
     ASSERT_LT(k, n / 3);
-    const Reference all = brute_force(w, &active);  // its pair count is the active rows'
-    const auto v = w.fluid.store.get(comp::velocity);
-    const auto a = w.fluid.store.get(comp::acceleration);
-    const auto rho = w.fluid.store.get(comp::density);
-    double err_sum = 0, err_max = 0, v_max = 0, a_max = 0;
-    Index a_arg = 0;
-    for (Index i : w.active_set) {
-        const double e = std::max(double(rho[i]) / w.physics.rest_density - 1.0, 0.0);
-        err_sum += e;
-        err_max = std::max(err_max, e);
-        v_max = std::max(v_max, v[i].cast<double>().norm());
-        if (a[i].cast<double>().norm() > a_max) a_max = a[i].cast<double>().norm(), a_arg = i;
-    }
-    ASSERT_LT(a_max, all.a_max * (1 - 1e-5)) << "the subset must miss the largest |a| for the test to tell";
+    const Reference all = brute_force(w, &active);       // its pair count is the active rows'
+    const Reference sub = brute_force(w, &active, true);  // and its statistics are too
+    ASSERT_LT(sub.a_max, all.a_max * (1 - 1e-5)) << "the subset must miss the largest |a| for the test to tell";
     w.counters.clear();
     w.counters["active"] = k;
     run_system(StepStatsSystem(false, StepStatsSystem::Rows::Active), w);
     EXPECT_EQ(w.counter_value("updated"), k);
     EXPECT_EQ(w.counter_value("neighbour_pairs"), all.pairs);
-    EXPECT_NEAR(w.stats.rho_err_avg, err_sum / double(k), 1e-12 * err_sum / double(k));
-    EXPECT_DOUBLE_EQ(w.stats.rho_err_max, err_max);
-    EXPECT_NEAR(w.stats.v_max, v_max, 1e-6 * v_max);
-    EXPECT_NEAR(w.stats.a_max, a_max, 1e-6 * a_max);
-    EXPECT_EQ(w.stats.a_max_particle, a_arg);
+    EXPECT_NEAR(w.stats.rho_err_avg, sub.err_avg, 1e-12 * sub.err_avg);
+    EXPECT_DOUBLE_EQ(w.stats.rho_err_max, sub.err_max);
+    EXPECT_NEAR(w.stats.v_max, sub.v_max, 1e-6 * sub.v_max);
+    EXPECT_NEAR(w.stats.a_max, sub.a_max, 1e-6 * sub.a_max);
+    EXPECT_EQ(w.stats.a_max_particle, sub.a_arg);
 
     // Every row active: the same bits as the whole-fluid statistics.
     w.active_set.clear();
-    for (std::size_t i = 0; i < n; ++i) act[i] = 1, w.active_set.push_back(Index(i));
+    activate(w, [](Index) { return true; });
     w.counters.clear();
     w.counters["active"] = n;
     run_system(StepStatsSystem(false, StepStatsSystem::Rows::Active), w);
