@@ -3,6 +3,7 @@
 #include "systems/active/binned_select_system.hpp"
 
 #include <algorithm>
+#include <numeric>
 
 #include "engine/data/components.hpp"
 #include "engine/data/world.hpp"
@@ -118,7 +119,11 @@ void BinnedSelectSystem::run(Context& ctx) {
                 set.push_back(Index(i));
             }
         }
-        sort_runs(set);
+        // Each row is in the set once, so a set of n rows is every row: 0..n-1 without the merge.
+        if (set.size() == n)
+            std::iota(set.begin(), set.end(), Index(0));
+        else
+            sort_runs(set);
     }
     ctx.write(counter::active) = set.size();
 }

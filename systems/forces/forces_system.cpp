@@ -99,9 +99,9 @@ void ForcesSystem::run(Context& ctx) {
     // carries no per-neighbour branches for the individual-only sums or the correction.
     // He Alg. 2 line 13, computed exactly as the global step of eq. 6-8 (so that equal steps
     // reproduce `global`), from the particle's velocity and its new acceleration.
+    const StepBound bound(stepping, h, c, ph.kinematic_viscosity);
     auto raw_step = [&](Index i) {
-        dt_raw[i] = global_time_step(stepping, h, c, std::sqrt(double(v[i].squaredNorm())),
-                                     std::sqrt(double(acc[i].squaredNorm())), ph.kinematic_viscosity);
+        dt_raw[i] = bound(std::sqrt(double(v[i].squaredNorm())), std::sqrt(double(acc[i].squaredNorm())));
     };
     // Drho: drho_i/dt is wanted (individual stepping with the summation density).
     auto evaluate = [&]<bool Drho, bool Corrected>(Index i) {

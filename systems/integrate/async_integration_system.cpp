@@ -7,6 +7,8 @@
 
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
+
 #include "engine/data/components.hpp"
 #include "engine/data/world.hpp"
 #include "engine/graph/context.hpp"
@@ -46,6 +48,13 @@ void AsyncIntegrationSystem::run(Context& ctx) {
         auto x0 = ctx.write(fluid(comp::position_last));
         auto v0 = ctx.write(fluid(comp::velocity_last));
         const auto& set = ctx.read(res::active_set);
+        if (set.size() == x.size()) {  // every row (the set is 0..n-1): two straight copies
+            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 8192), [&](const auto& r) {
+                std::copy(x.begin() + r.begin(), x.begin() + r.end(), x0.begin() + r.begin());
+                std::copy(v.begin() + r.begin(), v.begin() + r.end(), v0.begin() + r.begin());
+            });
+            return;
+        }
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, set.size(), 4096), [&](const auto& r) {
             for (std::size_t k = r.begin(); k < r.end(); ++k) {
                 x0[set[k]] = x[set[k]];

@@ -91,7 +91,8 @@ Access DriftRowsSystem::access() const {
     Access acc = Access()
         .read(fluid(comp::velocity_last), fluid(comp::acceleration), fluid(comp::t_last), fluid(comp::density_last),
               fluid(comp::drho_dt))
-        .read_if(!m_all, res::active_set, res::fluid_neighbours)
+        .read(res::active_set)
+        .read_if(!m_all, res::fluid_neighbours)
         .write(fluid(comp::velocity), fluid(comp::density), fluid(comp::pressure), res::drifted);
     if (!m_all) acc.rows(res::drifted);
     return acc;
@@ -123,7 +124,19 @@ void DriftRowsSystem::run(Context& ctx) {
     };
     rows.clear();
     const std::size_t n = v.size();
-    const auto& set = m_all ? rows : ctx.read(res::active_set);
+    const auto& set = ctx.read(res::active_set);
+    if (m_summed && set.size() == n) {
+        // Every row is evaluated this step and the density system sums rho and p of each anew:
+        // only the velocity is read before that.
+        rows.resize(n);
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, kGrain), [&](const auto& r) {
+            for (std::size_t i = r.begin(); i < r.end(); ++i) {
+                rows[i] = Index(i);
+                if (t_last[i] != now) v[i] = drifted_velocity(v0[i], a[i], drift_interval(now, t_last[i]));
+            }
+        });
+        return;
+    }
     if (m_all || 128 * set.size() >= n) {
         // Every row, in one streaming pass: from n/128 active rows on, their lists reach a large
         // share of the rows (up to 30 or 40 each where the active rows are scattered), and

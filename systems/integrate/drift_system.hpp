@@ -38,7 +38,9 @@ public:
     /// @param all drift every row's velocity, density and pressure (with the walls'
     /// extrapolated pressure, Adami et al. 2012, which reads the fluid around each wall
     /// particle near an active row: up to 2h from it, beyond the active rows' lists).
-    explicit DriftRowsSystem(bool all = false) : m_all(all) {}
+    /// @param summed the density system sums rho (and p) of every active row: when every row is
+    /// active, only the velocity is drifted.
+    explicit DriftRowsSystem(bool all = false, bool summed = false) : m_all(all), m_summed(summed) {}
     std::string name() const override { return "drift_rows"; }
     Access access() const override;
     void register_components(World& w) override;
@@ -46,6 +48,7 @@ public:
 
 private:
     bool m_all;
+    bool m_summed;
     std::vector<std::uint8_t> m_mark;  ///< a row claimed this step (cleared after use)
 };
 

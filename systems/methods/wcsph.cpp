@@ -55,8 +55,8 @@ Recipe make_wcsph_recipe(const Scene& scene) {
     const bool extrapolated = boundary && wall_pressure(scene) == WallPressure::Extrapolated;
     // binned: velocity, density and pressure of the rows the pair systems read (every row when
     // the extrapolated walls read the fluid beyond the active rows' lists).
-    if (binned) r.step.push_back(std::make_unique<DriftRowsSystem>(extrapolated));
     const bool continuity = density_form(scene) == DensityForm::Continuity;
+    if (binned) r.step.push_back(std::make_unique<DriftRowsSystem>(extrapolated, !continuity));
     r.step.push_back(std::make_unique<DensitySystem>(boundary, individual, continuity, moving));
     if (extrapolated) r.step.push_back(std::make_unique<WallPressureSystem>(individual));
     const bool corrected = scene.fluid.pressure_gradient == PressureGradient::Corrected;

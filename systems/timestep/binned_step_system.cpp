@@ -60,6 +60,7 @@ void BinnedStepSystem::run(Context& ctx) {
     DueBuckets& buckets = ctx.write(res::due_buckets);
     StepSize& s = ctx.write(res::dt);
     std::uint64_t woken_count = 0, passes = 0;
+    double raw_hi = 0;  // the longest Delta t_i^raw of the step
     if (!set.empty()) {
         // The stable step of this step: the shortest Delta t_i^raw evaluated (checked against
         // dt_min by the engine, which names this system when it collapses).
@@ -78,6 +79,7 @@ void BinnedStepSystem::run(Context& ctx) {
             },
             [](Range a, Range b) { return Range{std::min(a.lo, b.lo), std::max(a.hi, b.hi)}; });
         s.dt_stable = raw.lo;
+        raw_hi = raw.hi;
         // 0. Every particle due: no step is in flight, so the timeline starts afresh here with
         // a bin near the shortest step (BinTimeline::rebased).
         if (set.size() == bin.size() && m_headroom > 0) {
@@ -98,6 +100,12 @@ void BinnedStepSystem::run(Context& ctx) {
         // order of either list does not change the result.
         buckets.bin_lo = std::min(buckets.bin_lo, tl.bin_for(s.dt_stable));
         const int lo = buckets.bin_lo, hi = buckets.bin_hi;
+        // Every row active: no row sleeps (nothing to wake) and every list is built, so j is in
+        // i's list exactly when i is in j's (the same squared distance). The limiter then pushes
+        // from the rows that can bound a neighbour (bin_j + 2 below the largest raw bin, which
+        // bounds every new bin) instead of pulling at every row above lo + 2.
+        const bool dense = set.size() == bin.size();
+        const int hi_raw = dense ? tl.bin_for(raw_hi) : 0;
         tbb::enumerable_thread_specific<std::vector<Index>> limit_rows, wake_rows;
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, set.size(), kGrain), [&](const auto& r) {
             auto& lim = limit_rows.local();
@@ -110,6 +118,10 @@ void BinnedStepSystem::run(Context& ctx) {
                     if (b > old) b = BinTimeline::aligned(now, old + 1) ? old + 1 : old;
                 }
                 bin[i] = std::uint8_t(b);
+                if (dense) {
+                    if (b + 2 < hi_raw) lim.push_back(i);
+                    continue;
+                }
                 const bool limited = b > lo + 2;
                 if (limited) lim.push_back(i);
                 if (limited || b + 2 < hi) wak.push_back(i);
@@ -164,10 +176,36 @@ void BinnedStepSystem::run(Context& ctx) {
                 },
                 [](bool a, bool b) { return a || b; });
         };
+        // Pushing: bin_i = min(bin_i, bin_j + 2) for every i in j's list, then again from the
+        // rows that lowered and can still bound a neighbour. A row lowered while it pushes is
+        // among those, so its final bin is pushed too: every pair ends within 2 bins, and as
+        // bins only fall the fixed point is the one the pulling passes reach.
+        auto push_limit = [&] {
+            tbb::enumerable_thread_specific<std::vector<Index>> lowered;
+            while (!m_limit.empty()) {
+                ++passes;
+                for (auto& v : lowered) v.clear();
+                tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m_limit.size(), kGrain), [&](const auto& r) {
+                    auto& out = lowered.local();
+                    for (std::size_t k = r.begin(); k < r.end(); ++k) {
+                        const Index j = m_limit[k];
+                        const int cap = std::atomic_ref<std::uint8_t>(bin[j]).load(std::memory_order_relaxed) + 2;
+                        for (Index i : lists.of(j))
+                            if (atomic_lower(bin[i], std::uint8_t(cap)) && cap + 2 < hi_raw) out.push_back(i);
+                    }
+                });
+                m_limit.clear();
+                for (auto& v : lowered) m_limit.insert(m_limit.end(), v.begin(), v.end());
+            }
+        };
         // Wake-up leaves the active bins as they are, so after it only a limiter pass that
         // changes an active bin (bounded by a newly lowered sleeping one) calls for another.
-        limit();
-        while (wake() && limit()) {
+        if (dense) {
+            push_limit();
+        } else {
+            limit();
+            while (wake() && limit()) {
+            }
         }
         // 4. New ends. Active particles: a whole step of their bin from now, filed by bin (at
         // most max_bin + 1 buckets touched, each appended once, in ascending row order). Woken

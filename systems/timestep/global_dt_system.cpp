@@ -11,12 +11,7 @@
 namespace sph {
 
 double global_time_step(const SteppingParams& p, double h, double c_s, double v_max, double a_max, double nu) {
-    double dt = p.dt_max;
-    if (nu > 0) dt = std::min(dt, 0.125 * (0.5 * h) * (0.5 * h) / nu);  // Morris et al. 1997 eq. 12
-    if (v_max > 0) dt = std::min(dt, p.lambda_v * h / v_max);       // eq. 6
-    if (a_max > 0) dt = std::min(dt, p.lambda_f * std::sqrt(h / a_max));  // eq. 7
-    if (p.acoustic) dt = std::min(dt, p.lambda_c * h / (c_s + v_max));
-    return dt;  // eq. 8
+    return StepBound(p, h, c_s, nu)(v_max, a_max);
 }
 
 Access GlobalDtSystem::access() const { return Access().read(res::stats).write(res::dt); }

@@ -1,0 +1,92 @@
+// BinnedStepSystem (systems/timestep/binned_step_system.hpp) in a step where every particle is
+// due: the neighbour limiter's fixed point (bin_i <= bin_j + 2 for every j in i's list, bins
+// only lowered from their raw values) against a brute-force serial relaxation over the same
+// lists. One fast particle at the end of a long block bounds its neighbours, which bound
+// theirs: the bins rise by 2 per ring of neighbours, so the fixed point needs several rounds
+// and is only reached if every lowered particle passes its new bound on.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numeric>
+
+#include "engine/data/components.hpp"
+#include "engine/data/world.hpp"
+#include "engine/data/world_init.hpp"
+#include "engine/graph/system.hpp"
+#include "systems/active/binned_select_system.hpp"
+#include "systems/neighbours/fluid_grid_system.hpp"
+#include "systems/neighbours/fluid_neighbours_system.hpp"
+#include "systems/timestep/binned_state.hpp"
+#include "systems/timestep/binned_step_system.hpp"
+#include "test_scenes.hpp"
+
+using namespace sph;
+
+namespace {
+
+// Raw bins from the step's timeline (as BinnedStepSystem takes them at t = 0, where any bin is
+// allowed), relaxed over the lists until nothing changes.
+std::vector<int> relaxed_bins(const World& w) {
+    const auto& tl = w.resources.get<BinTimeline>(res::bin_timeline.name);
+    const auto dt_raw = w.fluid.store.get(comp::dt_raw);
+    const NeighbourLists& lists = w.fluid_neighbours;
+    std::vector<int> bin(dt_raw.size());
+    for (std::size_t i = 0; i < bin.size(); ++i) bin[i] = tl.bin_for(dt_raw[i]);
+    for (bool changed = true; changed;) {
+        changed = false;
+        for (std::size_t i = 0; i < bin.size(); ++i)
+            for (Index j : lists.of(Index(i)))
+                if (bin[i] > bin[j] + 2) {
+                    bin[i] = bin[j] + 2;
+                    changed = true;
+                }
+    }
+    return bin;
+}
+
+}  // namespace
+
+TEST(BinnedStepSystem, EveryRowDueReachesTheLimitersFixedPointAlongChains) {
+    // 40 x 6 x 6 particles 2 cm apart, jittered by 0.2 r, so the fast particle's
+    // bound takes 6 rings of neighbours to reach the top bin.
+    Scene s = test::tank_scene(Vec3d(0.8, 0.12, 0.12), Vec3d(0.9, 0.2, 0.2));
+    s.simulation.stepping.mode = SteppingMode::Binned;
+    World w;
+    initialise_world(w, s);
+    test::jitter(w, 7, 0.2f);
+    const SteppingParams& st = w.scene.simulation.stepping;
+    BinnedSelectSystem select(st.dt_min, st.dt_max);
+    BinnedStepSystem step(st.dt_min, st.dt_max, /*headroom=*/0);  // the fixed ladder dt_max / 2^k
+    select.register_components(w);
+    step.register_components(w);
+    run_system(FluidGridSystem(), w);
+    run_system(FluidNeighbourSystem(), w);
+    const std::size_t n = w.fluid.size();
+    ASSERT_EQ(n, 40u * 6u * 6u);
+    // Every row due at t = 0: the active set is every row, ascending.
+    w.active_set.resize(n);
+    std::iota(w.active_set.begin(), w.active_set.end(), Index(0));
+    auto active = w.fluid.store.get(comp::active);
+    std::fill(active.begin(), active.end(), std::uint8_t(1));
+    // Every particle may take dt_max except the one nearest x = 0, which needs dt_max / 2^12.
+    auto dt_raw = w.fluid.store.get(comp::dt_raw);
+    const auto x = w.fluid.store.get(comp::position);
+    std::size_t fast = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+        dt_raw[i] = st.dt_max;
+        if (x[i].x() < x[fast].x()) fast = i;
+    }
+    dt_raw[fast] = std::ldexp(st.dt_max, -12);
+    run_system(step, w);
+    const std::vector<int> expected = relaxed_bins(w);
+    const auto bin = w.fluid.store.get(comp::bin);
+    const auto& tl = w.resources.get<BinTimeline>(res::bin_timeline.name);
+    int rings = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+        ASSERT_EQ(int(bin[i]), expected[i]) << "particle " << i << " at x = " << x[i].x();
+        rings = std::max(rings, (expected[i] - expected[fast]) / 2);
+    }
+    // The chain is long: bins from the fast one's up to the top bin, 2 per ring (12 bins).
+    EXPECT_EQ(expected[fast], tl.max_bin - 12);
+    EXPECT_EQ(rings, 6);
+}
