@@ -7,9 +7,12 @@
 //
 // BM_Snapshot_Step/<scene>/<mode>: one whole step of the flow graph from the snapshot (each
 //   iteration restores the snapshot first, outside the timing, so every iteration times the same
-//   step). items/s = fluid-particle-steps per second.
+//   step). items/s = fluid-particle-steps per second. binned_every_row_due: `binned`'s first step
+//   after the snapshot that evaluates every particle (the step to set beside `global`'s).
 // BM_Snapshot_<system>/<scene>: one system of the `global` recipe on the snapshot (fluid_grid,
 //   fluid_neighbours, boundary_neighbours, density, forces), the systems before it run once.
+//   .../binned_every_row_due: the pair system as the `binned` recipe has it, on the same
+//   snapshot with every particle due (what a `binned` step that evaluates every row costs).
 // BM_Snapshot_dfsph_<pass>/<scene>: DFSPH's pair passes on its own snapshot (factor: density,
 //   factor, stored gradients and viscosity; pressure and source: one pass of the density solver),
 //   the recipe's systems before the density solve run once.
@@ -17,7 +20,9 @@
 #include <tbb/global_control.h>
 
 #include <filesystem>
+#include <algorithm>
 #include <map>
+#include <numeric>
 #include <memory>
 
 #include "engine/data/components.hpp"
@@ -40,9 +45,38 @@ Scene scene_for(const std::string& scene, const std::string& mode) {
     return load_scene(SPH_SOURCE_DIR "/scenes/" + scene + ".json", o);
 }
 
+std::unique_ptr<Simulation> snapshot(const std::string& scene, const std::string& mode, bool simd);
+
+/// `binned` from its snapshot on to the first step that evaluates every particle, saved as the
+/// fixture `file` just before that step.
+std::unique_ptr<Simulation> binned_every_row_due(const std::string& scene, bool simd, const std::filesystem::path& file) {
+    auto sim = snapshot(scene, "binned", simd);
+    const std::filesystem::path before = file.string() + ".part";
+    for (int k = 0; k < 10000; ++k) {
+        write_checkpoint(before, *sim, nlohmann::json{{"fixture", "bench/snapshot_bench.cpp"}});
+        sim->step();
+        if (sim->world().counter_value("active") == sim->world().fluid.size()) {
+            std::filesystem::rename(before, file);
+            restore_checkpoint(*sim, read_checkpoint(file));
+            return sim;
+        }
+    }
+    throw std::runtime_error("binned_every_row_due: no step evaluated every particle");
+}
+
 /// A simulation of `scene` in `mode` at t = 0.5 s: from the fixture file if it exists, else
-/// run there (at the machine's thread count) and saved.
+/// run there (at the machine's thread count) and saved. `binned_every_row_due`: `binned` just
+/// before its first step after that which evaluates every particle.
 std::unique_ptr<Simulation> snapshot(const std::string& scene, const std::string& mode, bool simd) {
+    if (mode == "binned_every_row_due") {
+        const std::filesystem::path file = std::filesystem::path(SPH_BENCH_FIXTURE_DIR) / (scene + "_" + mode + ".ckpt");
+        if (!std::filesystem::exists(file)) return binned_every_row_due(scene, simd, file);
+        Scene s = scene_for(scene, "binned");
+        s.simulation.simd = simd;
+        auto sim = make_simulation(s);
+        restore_checkpoint(*sim, read_checkpoint(file));
+        return sim;
+    }
     Scene s = scene_for(scene, mode);
     s.simulation.simd = simd;
     auto sim = make_simulation(s);
@@ -84,20 +118,34 @@ void snapshot_step(benchmark::State& state, const std::string& scene, const std:
         state.iterations() ? updated / (double(sim->world().fluid.size()) * double(state.iterations())) : 0.0;
 }
 
-/// One system of the `global` recipe, by name, on the snapshot.
-void snapshot_system(benchmark::State& state, const std::string& scene, const std::string& system) {
+/// One system of the `global` recipe, by name, on the snapshot; with `mode` "binned", the same
+/// system as the `binned` recipe has it, on the same snapshot with every particle due (the
+/// base state is the current one, so the drifts leave every row as it is).
+void snapshot_system(benchmark::State& state, const std::string& scene, const std::string& system,
+                     const std::string& mode = "global") {
     const bool simd = state.range(0) != 0;
     tbb::global_control threads(tbb::global_control::max_allowed_parallelism, std::size_t(state.range(1)));
     auto sim = snapshot(scene, "global", simd);
     World& w = sim->world();
-    Recipe recipe = make_recipe(scene_for(scene, "global"));
+    Recipe recipe = make_recipe(scene_for(scene, mode));
     System* target = nullptr;
     for (auto& s : recipe.step) s->register_components(w);
+    if (mode == "binned") {
+        ComponentStore& f = w.fluid.store;
+        std::copy_n(f.get(comp::position).data(), w.fluid.size(), f.get(comp::position_last).data());
+        std::copy_n(f.get(comp::velocity).data(), w.fluid.size(), f.get(comp::velocity_last).data());
+        std::copy_n(f.get(comp::density).data(), w.fluid.size(), f.get(comp::density_last).data());
+        std::ranges::fill(f.get(comp::t_last), w.clock.t_ticks);
+        std::ranges::fill(f.get(comp::active), std::uint8_t(1));
+        w.active_set.resize(w.fluid.size());
+        std::iota(w.active_set.begin(), w.active_set.end(), Index(0));
+    }
     for (auto& s : recipe.step) {
         if (s->name() == system) {
             target = s.get();
             break;
         }
+        if (mode == "binned" && (s->name() == "drift" || s->name() == "binned_select")) continue;  // set above
         run_system(*s, w);  // what the system reads: grid, lists, density as this step has them
     }
     if (!target) {
@@ -142,12 +190,16 @@ const bool registered = [] {
             ->MinTime(1.0);
     };
     for (const std::string scene : {"peer_dam_break", "dam_break_obstacles"}) {
-        for (const std::string mode : {"global", "individual", "binned", "adaptive", "dfsph"})
+        for (const std::string mode : {"global", "individual", "binned", "binned_every_row_due", "adaptive", "dfsph"})
             args(benchmark::RegisterBenchmark(("BM_Snapshot_Step/" + scene + "/" + mode).c_str(),
                                               [scene, mode](benchmark::State& s) { snapshot_step(s, scene, mode); }));
         for (const std::string system : {"fluid_grid", "fluid_neighbours", "boundary_neighbours", "density", "forces"})
             args(benchmark::RegisterBenchmark(("BM_Snapshot_" + system + "/" + scene).c_str(),
                                               [scene, system](benchmark::State& s) { snapshot_system(s, scene, system); }));
+        // The same pair systems as `binned` runs them in a step with every particle due.
+        for (const std::string system : {"fluid_neighbours", "boundary_neighbours", "density", "forces"})
+            args(benchmark::RegisterBenchmark(("BM_Snapshot_" + system + "/" + scene + "/binned_every_row_due").c_str(),
+                                              [scene, system](benchmark::State& s) { snapshot_system(s, scene, system, "binned"); }));
         for (const std::string pass : {"factor", "pressure", "source"})
             args(benchmark::RegisterBenchmark(("BM_Snapshot_dfsph_" + pass + "/" + scene).c_str(),
                                               [scene, pass](benchmark::State& s) { snapshot_dfsph_pass(s, scene, pass); }));
