@@ -222,20 +222,18 @@ struct QuerySource {
     std::size_t count = 0;  ///< candidates
 };
 
-/// `next_cell` for a build of every list, whose consecutive rows share cells.
-constexpr std::int64_t kAlwaysCache = -2;
-
 /// Picks the source of query xi. A cache fill copies every candidate once, as much as one filter
 /// pass: it pays when the cache already holds the query's cell or the next query (`next_cell`,
-/// -1 for none) shares it. A subset build (binned and individual stepping) whose due particles
-/// are scattered meets most cells once, and then reads the grid's own coordinates instead
-/// (grids that keep them; the lists are the same, in the same order).
+/// -1 for none) shares it. Otherwise the query reads the grid's own coordinates (grids that
+/// keep them; the lists are the same, in the same order): a subset build (binned and individual
+/// stepping) whose due particles are scattered meets most cells once, and so does a build of
+/// every list on a disordered flow, where a cell holds two or three particles.
 
 /// `cell` is the query's own (grid.cell_of(xi)).
 QuerySource source_for(const UniformGrid& grid, std::span<const Vec3> grid_positions, CandidateCache& cache,
                        const Vec3& xi, std::int64_t cell, std::int64_t next_cell) {
     QuerySource q;
-    if (next_cell != kAlwaysCache && cell != cache.cell && next_cell != cell && grid.sorted_x() != nullptr) {
+    if (cell != cache.cell && next_cell != cell && grid.sorted_x() != nullptr) {
         q.direct = true;
         q.ranges = grid.candidate_ranges(xi);
         q.count = q.ranges.total;
@@ -309,9 +307,9 @@ void build_compact(const UniformGrid& grid, std::span<const Vec3> grid_positions
                 const Vec3 xi = query_positions[i];
                 // Each query's cell is computed once: the look-ahead's is kept for the next.
                 const std::int64_t cell = known >= 0 ? known : grid.cell_of(xi);
-                const std::int64_t next_cell = every ? kAlwaysCache
-                                               : k < k_end ? grid.cell_of(query_positions[rows[k]]) : -1;
-                known = every ? -1 : next_cell;
+                const std::int64_t next_cell = every ? (i + 1 < row_end ? grid.cell_of(query_positions[i + 1]) : -1)
+                                               : (k < k_end ? grid.cell_of(query_positions[rows[k]]) : -1);
+                known = next_cell;
                 const QuerySource src = source_for(grid, grid_positions, cache, xi, cell, next_cell);
                 // Room for every candidate plus a vector of slack (the vectorised filter's
                 // whole-vector stores, and the readers' whole-vector loads).
@@ -382,9 +380,9 @@ void build_slab(const UniformGrid& grid, std::span<const Vec3> grid_positions,
                 const Index i = subset.all ? Index(q) : subset.indices[q];
                 const Vec3 xi = query_positions[i];
                 const std::int64_t cell = known >= 0 ? known : grid.cell_of(xi);
-                const std::int64_t next_cell = subset.all ? kAlwaysCache
-                                               : q + 1 < r.end() ? grid.cell_of(query_positions[subset.indices[q + 1]]) : -1;
-                known = subset.all ? -1 : next_cell;
+                const std::int64_t next_cell =
+                    q + 1 < r.end() ? grid.cell_of(query_positions[subset.all ? Index(q + 1) : subset.indices[q + 1]]) : -1;
+                known = next_cell;
                 const QuerySource src = source_for(grid, grid_positions, cache, xi, cell, next_cell);
                 if (found.size() < src.count + NeighbourLists::kSlack) found.resize(2 * src.count + NeighbourLists::kSlack);
                 const Index c = filter(grid, cache, src, xi, exclude_self ? i : kNoSelf, r2, found.data(), simd);
