@@ -7,8 +7,9 @@
 //
 // BM_Snapshot_Step/<scene>/<mode>: one whole step of the flow graph from the snapshot (each
 //   iteration restores the snapshot first, outside the timing, so every iteration times the same
-//   step). items/s = fluid-particle-steps per second. binned_every_row_due: `binned`'s first step
-//   after the snapshot that evaluates every particle (the step to set beside `global`'s).
+//   step). items/s = fluid-particle-steps per second. The first step after a restore costs more
+//   than a step of a run (dam_break_obstacles `global`, one thread: 14.4 ms against a run's
+//   median 10.7 ms, 2026-12-05): compare modes with runs' per-step medians (stats.csv).
 // BM_Snapshot_<system>/<scene>: one system of the `global` recipe on the snapshot (fluid_grid,
 //   fluid_neighbours, boundary_neighbours, density, forces), the systems before it run once.
 //   .../binned_every_row_due: the pair system as the `binned` recipe has it, on the same
@@ -45,38 +46,9 @@ Scene scene_for(const std::string& scene, const std::string& mode) {
     return load_scene(SPH_SOURCE_DIR "/scenes/" + scene + ".json", o);
 }
 
-std::unique_ptr<Simulation> snapshot(const std::string& scene, const std::string& mode, bool simd);
-
-/// `binned` from its snapshot on to the first step that evaluates every particle, saved as the
-/// fixture `file` just before that step.
-std::unique_ptr<Simulation> binned_every_row_due(const std::string& scene, bool simd, const std::filesystem::path& file) {
-    auto sim = snapshot(scene, "binned", simd);
-    const std::filesystem::path before = file.string() + ".part";
-    for (int k = 0; k < 10000; ++k) {
-        write_checkpoint(before, *sim, nlohmann::json{{"fixture", "bench/snapshot_bench.cpp"}});
-        sim->step();
-        if (sim->world().counter_value("active") == sim->world().fluid.size()) {
-            std::filesystem::rename(before, file);
-            restore_checkpoint(*sim, read_checkpoint(file));
-            return sim;
-        }
-    }
-    throw std::runtime_error("binned_every_row_due: no step evaluated every particle");
-}
-
 /// A simulation of `scene` in `mode` at t = 0.5 s: from the fixture file if it exists, else
-/// run there (at the machine's thread count) and saved. `binned_every_row_due`: `binned` just
-/// before its first step after that which evaluates every particle.
+/// run there (at the machine's thread count) and saved.
 std::unique_ptr<Simulation> snapshot(const std::string& scene, const std::string& mode, bool simd) {
-    if (mode == "binned_every_row_due") {
-        const std::filesystem::path file = std::filesystem::path(SPH_BENCH_FIXTURE_DIR) / (scene + "_" + mode + ".ckpt");
-        if (!std::filesystem::exists(file)) return binned_every_row_due(scene, simd, file);
-        Scene s = scene_for(scene, "binned");
-        s.simulation.simd = simd;
-        auto sim = make_simulation(s);
-        restore_checkpoint(*sim, read_checkpoint(file));
-        return sim;
-    }
     Scene s = scene_for(scene, mode);
     s.simulation.simd = simd;
     auto sim = make_simulation(s);
@@ -190,7 +162,7 @@ const bool registered = [] {
             ->MinTime(1.0);
     };
     for (const std::string scene : {"peer_dam_break", "dam_break_obstacles"}) {
-        for (const std::string mode : {"global", "individual", "binned", "binned_every_row_due", "adaptive", "dfsph"})
+        for (const std::string mode : {"global", "individual", "binned", "adaptive", "dfsph"})
             args(benchmark::RegisterBenchmark(("BM_Snapshot_Step/" + scene + "/" + mode).c_str(),
                                               [scene, mode](benchmark::State& s) { snapshot_step(s, scene, mode); }));
         for (const std::string system : {"fluid_grid", "fluid_neighbours", "boundary_neighbours", "density", "forces"})
