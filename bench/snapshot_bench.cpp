@@ -121,7 +121,7 @@ void snapshot_system(benchmark::State& state, const std::string& scene, const st
         run_system(*s, w);  // what the system reads: grid, lists, density as this step has them
     }
     if (!target) {
-        state.SkipWithError(("no system " + system + " in the global recipe").c_str());
+        state.SkipWithError(("no system " + system + " in the " + mode + " recipe").c_str());
         return;
     }
     for (auto _ : state) run_system(*target, w);

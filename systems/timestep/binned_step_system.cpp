@@ -93,9 +93,9 @@ void BinnedStepSystem::run(Context& ctx) {
     const std::uint64_t now = tl.now;
     if (!set.empty()) {
         // 1. Raw bins, with the growth rule (at t = 0 every bin is aligned and any is allowed),
-        // and the rows that can break the rule: the limiter visits bin_i > lo + 2 (every bin is
-        // >= lo); the wake-up visits bin_i + 2 < hi (every bin is <= hi) and every row the
-        // limiter may lower. A row held back by the growth rule keeps a bin >= its old one, so
+        // and the rows that can break the rule: the limiter pulls at bin_i > lo + 2 (every bin
+        // is >= lo); the wake-up visits bin_i + 2 < hi (every bin is <= hi) and every row the
+        // limiter may lower. (With every row due, the rows that can bound others: below.) A row held back by the growth rule keeps a bin >= its old one, so
         // lo = min(old bound, bin of the shortest raw step) bounds every bin from below. The
         // order of either list does not change the result.
         buckets.bin_lo = std::min(buckets.bin_lo, tl.bin_for(s.dt_stable));
@@ -198,8 +198,8 @@ void BinnedStepSystem::run(Context& ctx) {
                 for (auto& v : lowered) m_limit.insert(m_limit.end(), v.begin(), v.end());
             }
         };
-        // Wake-up leaves the active bins as they are, so after it only a limiter pass that
-        // changes an active bin (bounded by a newly lowered sleeping one) calls for another.
+        // Otherwise: wake-up leaves the active bins as they are, so after it only a limiter pass
+        // that changes an active bin (bounded by a newly lowered sleeping one) calls for another.
         if (dense) {
             push_limit();
         } else {
