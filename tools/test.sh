@@ -7,7 +7,8 @@
 #      to stage 1: they cover no code the unit tests do not, at 3-10x the time).
 #   3. ThreadSanitizer build, linked against a TSan-instrumented oneTBB built from Debian's source
 #      (tools/install_tsan_tbb.sh): the graph and system tests (flow graph, per-system parallel
-#      loops, the NaN trace inside the graph's nodes, PCISPH and the emitter, checkpoints).
+#      loops, the NaN trace inside the graph's nodes, PCISPH and the emitter, checkpoints, the
+#      binned limiter's concurrent pushes).
 #   4. libFuzzer on the scene loader for SPH_FUZZ_SECONDS (default 60).
 # SPH_TEST_SANITIZERS=0 runs stage 1 only (a quick local check).
 set -euo pipefail
@@ -48,7 +49,8 @@ stage "3/4 ThreadSanitizer: graph and system tests, against a TSan-instrumented 
 tbb_dir=$(bash tools/install_tsan_tbb.sh)
 tsan_targets=(system_graph_test individual_systems_test forces_system_test boundary_motion_system_test
               grid_test checkpoint_test extremes_test emitter_system_test pcisph_test nonpressure_forces_system_test
-              gradient_correction_system_test vectorised_paths_test dfsph_test wall_pressure_system_test)
+              gradient_correction_system_test vectorised_paths_test dfsph_test wall_pressure_system_test
+              binned_step_system_test)
 # Without OpenVDB here: Debian's libopenvdb links Debian's (uninstrumented) libtbb, and no test
 # of this stage writes a surface.
 cmake -S . -B build-tsan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g" \

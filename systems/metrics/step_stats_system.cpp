@@ -13,7 +13,8 @@ Access StepStatsSystem::access() const {
     return Access()
         .read(fluid(comp::density), fluid(comp::velocity), fluid(comp::acceleration), res::fluid_neighbours)
         .write(res::stats, counter::updated, counter::neighbour_pairs)
-        .read_if(m_individual, fluid(comp::active), res::active_set, counter::active)
+        .read_if(m_individual, res::active_set, counter::active)
+        .read_if(m_individual && m_rows == Rows::All, fluid(comp::active))  // binned reads its set, not the flag
         .write_if(!m_individual, counter::active);
 }
 
