@@ -80,7 +80,9 @@ void check_chain(double headroom) {
     dt_raw[fast] = 0.7 * std::ldexp(st.dt_max, -12);
     run_system(step, w);
     const auto& tl = w.resources.get<BinTimeline>(res::bin_timeline.name);
-    if (headroom > 0) EXPECT_NE(tl.quantum, BinTimeline::for_range(st.dt_min, st.dt_max).quantum) << "not rebased";
+    if (headroom > 0) {
+        EXPECT_NE(tl.quantum, BinTimeline::for_range(st.dt_min, st.dt_max).quantum) << "not rebased";
+    }
     const std::vector<int> expected = relaxed_bins(w);
     const auto bin = w.fluid.store.get(comp::bin);
     int rings = 0;
