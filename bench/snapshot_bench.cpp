@@ -20,11 +20,11 @@
 #include <benchmark/benchmark.h>
 #include <tbb/global_control.h>
 
-#include <filesystem>
 #include <algorithm>
+#include <filesystem>
 #include <map>
-#include <numeric>
 #include <memory>
+#include <numeric>
 
 #include "engine/data/components.hpp"
 #include "engine/graph/system.hpp"

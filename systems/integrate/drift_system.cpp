@@ -122,22 +122,16 @@ void DriftRowsSystem::run(Context& ctx) {
         rho[i] = drifted_density(rho0[i], drho[i], dt);
         p[i] = tait_pressure(rho[i], rest, b);
     };
+    auto drift_velocity = [&](std::size_t i) {
+        if (t_last[i] != now) v[i] = drifted_velocity(v0[i], a[i], drift_interval(now, t_last[i]));
+    };
     rows.clear();
     const std::size_t n = v.size();
     const auto& set = ctx.read(res::active_set);
-    if (m_summed && set.size() == n) {
-        // Every row is evaluated this step and the density system sums rho and p of each anew:
-        // only the velocity is read before that.
-        rows.resize(n);
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, kGrain), [&](const auto& r) {
-            for (std::size_t i = r.begin(); i < r.end(); ++i) {
-                rows[i] = Index(i);
-                if (t_last[i] != now) v[i] = drifted_velocity(v0[i], a[i], drift_interval(now, t_last[i]));
-            }
-        });
-        return;
-    }
-    if (m_all || 128 * set.size() >= n) {
+    // Every row evaluated with the summation density: the density system sums rho and p of
+    // each anew, so only the velocity is read before that.
+    const bool velocity_only = m_summed && set.size() == n;
+    if (m_all || velocity_only || 128 * set.size() >= n) {
         // Every row, in one streaming pass: from n/128 active rows on, their lists reach a large
         // share of the rows (up to 30 or 40 each where the active rows are scattered), and
         // marking and drifting those at random costs more than streaming through all.
@@ -145,7 +139,7 @@ void DriftRowsSystem::run(Context& ctx) {
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, kGrain), [&](const auto& r) {
             for (std::size_t i = r.begin(); i < r.end(); ++i) {
                 rows[i] = Index(i);
-                drift(i);
+                velocity_only ? drift_velocity(i) : drift(i);
             }
         });
         return;

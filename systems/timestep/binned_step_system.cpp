@@ -95,9 +95,10 @@ void BinnedStepSystem::run(Context& ctx) {
         // 1. Raw bins, with the growth rule (at t = 0 every bin is aligned and any is allowed),
         // and the rows that can break the rule: the limiter pulls at bin_i > lo + 2 (every bin
         // is >= lo); the wake-up visits bin_i + 2 < hi (every bin is <= hi) and every row the
-        // limiter may lower. (With every row due, the rows that can bound others: below.) A row held back by the growth rule keeps a bin >= its old one, so
-        // lo = min(old bound, bin of the shortest raw step) bounds every bin from below. The
-        // order of either list does not change the result.
+        // limiter may lower (with every row due: the rows that can bound others, below). A row
+        // held back by the growth rule keeps a bin >= its old one, so lo = min(old bound, bin
+        // of the shortest raw step) bounds every bin from below. The order of either list does
+        // not change the result.
         buckets.bin_lo = std::min(buckets.bin_lo, tl.bin_for(s.dt_stable));
         const int lo = buckets.bin_lo, hi = buckets.bin_hi;
         // Every row active: no row sleeps (nothing to wake) and every list is built, so j is in
