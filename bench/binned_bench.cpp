@@ -138,6 +138,25 @@ void args(benchmark::internal::Benchmark* b) {
 
 }  // namespace
 
+/// BM_Binned_fluid_neighbours_drifted/<particles>/<due per mille>/<drift per mille of h>: the due
+/// rows' search against a grid kept from an earlier step (UniformGrid::set_drift, what
+/// FluidGridSystem does on binned's sparse steps), against BM_Binned_fluid_grid plus
+/// BM_Binned_fluid_neighbours (a fresh grid and the 27-cell search) at the same share.
+void BM_Binned_fluid_neighbours_drifted(benchmark::State& state) {
+    Pipeline p(std::size_t(state.range(0)), double(state.range(1)) / 1000.0);
+    System& s = p.get("fluid_neighbours");
+    p.w->fluid_grid.set_drift(Real(double(state.range(2)) / 1000.0) * p.w->physics.h);
+    for (auto _ : state) {
+        run_system(s, *p.w);
+        benchmark::ClobberMemory();
+    }
+    state.counters["active_fraction"] = double(p.w->active_set.size()) / double(p.w->fluid.size());
+}
+BENCHMARK(BM_Binned_fluid_neighbours_drifted)
+    ->ArgsProduct({{100'000, 1'000'000}, {100, 30, 10}, {30, 125}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
 #define SPH_BINNED_BENCH(system)                                                          \
     static void BM_Binned_##system(benchmark::State& state) { bench_named(state, #system); } \
     BENCHMARK(BM_Binned_##system)->Apply(args)

@@ -35,6 +35,7 @@ void ComponentStore::restore(const Snapshot& in) {
     }
     m_size = in.size;
     ++m_layout;
+    ++m_membership;
     tbb::parallel_for_each(jobs.begin(), jobs.end(), [](const auto& j) { j.first->assign(*j.second); });
 }
 

@@ -120,11 +120,16 @@ public:
     void resize(std::size_t n) {
         m_size = n;
         ++m_layout;
+        ++m_membership;
         for (auto& [name, col] : m_columns) col->resize(n);
     }
     /// @brief Changes whenever rows are reordered, added, removed or restored (permute, resize,
     /// restore): a system that keeps row indices across steps rebuilds them when it changes.
     std::uint64_t layout() const { return m_layout; }
+    /// @brief Changes whenever rows are added, removed or restored (resize, restore), but not
+    /// when they are only reordered: what holds over every row (a bound, a maximum) stays
+    /// valid across a reordering.
+    std::uint64_t membership() const { return m_membership; }
     /// @brief Applies one permutation to every registered column (new[i] = old[perm[i]]).
     /// Columns are independent, so they are permuted in parallel.
     void permute(std::span<const Index> perm);
@@ -173,6 +178,7 @@ private:
     std::map<std::string, std::unique_ptr<ColumnBase>, std::less<>> m_columns;
     std::size_t m_size = 0;
     std::uint64_t m_layout = 0;
+    std::uint64_t m_membership = 0;
 };
 
 }  // namespace sph

@@ -9,6 +9,7 @@
 #include <tbb/parallel_sort.h>
 
 #include <atomic>
+#include <cmath>
 #include <cstring>
 #include <sstream>
 #include <string>
@@ -46,7 +47,74 @@ std::size_t UniformGrid::bytes() const {
            m_offset.capacity() * sizeof(std::uint16_t) + (m_sx.capacity() + m_sy.capacity() + m_sz.capacity()) * sizeof(Real);
 }
 
+void UniformGrid::set_drift(Real drift) {
+    if (!(drift >= 0 && drift < Real(0.5) * m_cell))
+        throw std::logic_error("UniformGrid::set_drift: the drift must lie in [0, cell size / 2)");
+    m_drift = drift;
+}
+
+CandidateRanges UniformGrid::ranges_within(const Vec3& x, Real reach) const {
+    const Eigen::Vector3i lo = cell_coords(x - Vec3::Constant(reach)), hi = cell_coords(x + Vec3::Constant(reach));
+    CandidateRanges r;
+    for (int z = lo[2]; z <= hi[2]; ++z)
+        for (int y = lo[1]; y <= hi[1]; ++y) {
+            const std::int64_t row = cell_index({0, y, z});
+            const Index b = cell_start(row + lo[0]), e = cell_start(row + hi[0] + 1);
+            if (e == b) continue;
+            if (r.count == CandidateRanges::kMax)
+                throw std::logic_error("UniformGrid::ranges_within: more than 16 rows of cells (reach too long)");
+            r.begin[r.count] = b;
+            r.end[r.count] = e;
+            ++r.count;
+            r.total += e - b;
+        }
+    return r;
+}
+
+namespace {
+
+/// (cell, index) as one sortable key: a fresh grid lists its candidates in this order (cells
+/// ascending, x fastest, and within a cell by index, the counting sort being stable).
+std::uint64_t cell_key(std::int64_t cell, Index j) { return std::uint64_t(cell) << 32 | j; }
+
+/// Sorts keys that are nearly in order (a drifted grid's candidates: only those that changed
+/// cell since the build are out of place), in O(n + displacements).
+void insertion_sort(std::uint64_t* k, std::size_t n) {
+    for (std::size_t i = 1; i < n; ++i) {
+        const std::uint64_t v = k[i];
+        std::size_t j = i;
+        for (; j > 0 && k[j - 1] > v; --j) k[j] = k[j - 1];
+        k[j] = v;
+    }
+}
+
+}  // namespace
+
+std::span<const Index> UniformGrid::drifted_candidates(const Vec3& x, std::span<const Vec3> positions) const {
+    thread_local std::vector<std::uint64_t> keys;
+    thread_local std::vector<Index> out;
+    keys.clear();
+    // A particle now in one of the 27 cells around x's was built at most one cell further out
+    // (drift < cell size), so the stale cells two out are searched.
+    const Eigen::Vector3i c = cell_coords(x);
+    const int x0 = std::max(c[0] - 2, 0), x1 = std::min(c[0] + 2, m_dims[0] - 1);
+    for (int z = std::max(c[2] - 2, 0); z <= std::min(c[2] + 2, m_dims[2] - 1); ++z)
+        for (int y = std::max(c[1] - 2, 0); y <= std::min(c[1] + 2, m_dims[1] - 1); ++y) {
+            const std::int64_t row = cell_index({0, y, z});
+            for (Index k = cell_start(row + x0), e = cell_start(row + x1 + 1); k < e; ++k) {
+                const Index j = m_sorted_index[k];
+                const Eigen::Vector3i cj = cell_coords(positions[j]);
+                if ((cj - c).cwiseAbs().maxCoeff() <= 1) keys.push_back(cell_key(cell_index(cj), j));
+            }
+        }
+    insertion_sort(keys.data(), keys.size());
+    out.resize(keys.size());
+    for (std::size_t k = 0; k < keys.size(); ++k) out[k] = Index(keys[k]);
+    return out;
+}
+
 void UniformGrid::build(std::span<const Vec3> positions) {
+    m_drift = 0;
     const std::size_t n = positions.size();
     const std::size_t cells = cell_count();
     m_count = n;
@@ -214,12 +282,19 @@ Index filter_ranges_scalar(const UniformGrid& grid, const CandidateRanges& range
     return c;
 }
 
-/// Where one query's candidates are read from: its cell's cache, or the grid's slot-ordered
-/// coordinates directly (`direct`, the 9 ranges in `ranges`).
+/// Where one query's candidates are read from: its cell's cache, the grid's slot-ordered
+/// coordinates directly (`direct`, the 9 ranges in `ranges`), or a drifted grid's wider reach
+/// (`drifted`, up to 16 ranges).
 struct QuerySource {
-    bool direct = false;
+    bool direct = false, drifted = false;
     CandidateRanges ranges;
     std::size_t count = 0;  ///< candidates
+};
+
+/// What one worker keeps for the queries of a drifted grid (filter_drifted).
+struct DriftScratch {
+    CandidateCache current;  ///< the reach's candidates at their current positions
+    std::vector<std::uint64_t> keys;
 };
 
 /// Picks the source of query xi. A cache fill copies every candidate once, as much as one filter
@@ -228,11 +303,16 @@ struct QuerySource {
 /// keep them; the lists are the same, in the same order): a subset build (binned and individual
 /// stepping) whose due particles are scattered meets most cells once, and so does a build of
 /// every list on a disordered flow, where a cell holds two or three particles.
-
-/// `cell` is the query's own (grid.cell_of(xi)).
+/// `cell` is the query's own (grid.cell_of(xi)); `reach` is the list radius plus the grid's drift.
 QuerySource source_for(const UniformGrid& grid, std::span<const Vec3> grid_positions, CandidateCache& cache,
-                       const Vec3& xi, std::int64_t cell, std::int64_t next_cell) {
+                       const Vec3& xi, std::int64_t cell, std::int64_t next_cell, Real reach) {
     QuerySource q;
+    if (grid.drift() > 0) {
+        q.drifted = true;
+        q.ranges = grid.ranges_within(xi, reach);
+        q.count = q.ranges.total;
+        return q;
+    }
     if (cell != cache.cell && next_cell != cell && grid.sorted_x() != nullptr) {
         q.direct = true;
         q.ranges = grid.candidate_ranges(xi);
@@ -244,9 +324,54 @@ QuerySource source_for(const UniformGrid& grid, std::span<const Vec3> grid_posit
     return q;
 }
 
+/// The list of query xi against a drifted grid, equal to a fresh grid's (the same entries in
+/// the same order): (1) the candidates within reach (radius + drift) at the build's coordinates,
+/// a superset of those in range now; (2) those at their current positions through the filter a
+/// fresh grid's query uses (the same arithmetic, so the same borderline decisions); (3) sorted
+/// by current cell and index, a fresh grid's order.
+Index filter_drifted(const UniformGrid& grid, std::span<const Vec3> positions, const CandidateRanges& ranges,
+                     const Vec3& xi, Index self, Real r2, Real reach2, Index* dst, bool simd, DriftScratch& s) {
+    if (ranges.total == 0) return 0;
+    Index m = 0;
+    if (grid.sorted_x() != nullptr) {
+        m = simd ? filter_ranges_simd(grid, ranges, xi, self, reach2, dst)
+                 : filter_ranges_scalar(grid, ranges, xi, self, reach2, dst);
+    } else {
+        const Index* sj = grid.sorted_index().data();
+        for (int r = 0; r < ranges.count; ++r)
+            for (Index k = ranges.begin[r]; k < ranges.end[r]; ++k) dst[m++] = sj[k];
+    }
+    CandidateCache& c = s.current;
+    const std::size_t size = m + UniformGrid::kPadding;
+    for (auto* axis : {&c.x, &c.y, &c.z})
+        if (axis->size() < size) axis->resize(size);
+    if (c.index.size() < size) c.index.resize(size);
+    for (Index k = 0; k < m; ++k) {
+        const Vec3& p = positions[dst[k]];
+        c.x[k] = p.x();
+        c.y[k] = p.y();
+        c.z[k] = p.z();
+        c.index[k] = dst[k];
+    }
+    for (std::size_t k = m; k < size; ++k) {
+        c.x[k] = c.y[k] = c.z[k] = std::numeric_limits<Real>::max();
+        c.index[k] = 0;
+    }
+    c.count = m;
+    c.cell = -1;
+    const Index n = filter(c, xi, self, r2, dst, simd);
+    if (s.keys.size() < n) s.keys.resize(n);
+    for (Index k = 0; k < n; ++k) s.keys[k] = cell_key(grid.cell_of(positions[dst[k]]), dst[k]);
+    insertion_sort(s.keys.data(), n);
+    for (Index k = 0; k < n; ++k) dst[k] = Index(s.keys[k]);
+    return n;
+}
+
 /// The list of query xi from the source source_for picked.
-Index filter(const UniformGrid& grid, const CandidateCache& cache, const QuerySource& q, const Vec3& xi, Index self,
-             Real r2, Index* dst, bool simd) {
+Index filter(const UniformGrid& grid, std::span<const Vec3> grid_positions, const CandidateCache& cache,
+             const QuerySource& q, const Vec3& xi, Index self, Real r2, Real reach2, Index* dst, bool simd,
+             DriftScratch& drift) {
+    if (q.drifted) return filter_drifted(grid, grid_positions, q.ranges, xi, self, r2, reach2, dst, simd, drift);
     if (!q.direct) return filter(cache, xi, self, r2, dst, simd);
     if (q.count == 0) return 0;
     return simd ? filter_ranges_simd(grid, q.ranges, xi, self, r2, dst) : filter_ranges_scalar(grid, q.ranges, xi, self, r2, dst);
@@ -288,8 +413,11 @@ void build_compact(const UniformGrid& grid, std::span<const Vec3> grid_positions
     first.push_back(rows.size());
     const std::size_t jobs = every ? lists.blocks.size() : first.size() - 1;
     tbb::enumerable_thread_specific<CandidateCache> caches;
+    tbb::enumerable_thread_specific<DriftScratch> drifts;
+    const Real reach = std::sqrt(r2) + grid.drift(), reach2 = reach * reach;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, jobs, 1), [&](const auto& r) {
         CandidateCache& cache = caches.local();
+        DriftScratch& drift = drifts.local();
         for (std::size_t job = r.begin(); job < r.end(); ++job) {
             const std::size_t b = every ? job : rows[first[job]] / B;
             const std::size_t row_end = std::min(n, (b + 1) * B);
@@ -310,7 +438,7 @@ void build_compact(const UniformGrid& grid, std::span<const Vec3> grid_positions
                 const std::int64_t next_cell = every ? (i + 1 < row_end ? grid.cell_of(query_positions[i + 1]) : -1)
                                                : (k < k_end ? grid.cell_of(query_positions[rows[k]]) : -1);
                 known = next_cell;
-                const QuerySource src = source_for(grid, grid_positions, cache, xi, cell, next_cell);
+                const QuerySource src = source_for(grid, grid_positions, cache, xi, cell, next_cell, reach);
                 // Room for every candidate plus a vector of slack (the vectorised filter's
                 // whole-vector stores, and the readers' whole-vector loads).
                 const std::size_t need = used + src.count + NeighbourLists::kSlack;
@@ -320,7 +448,8 @@ void build_compact(const UniformGrid& grid, std::span<const Vec3> grid_positions
                     std::copy_n(buf.data(), used, grown.data());
                     buf.swap(grown);
                 }
-                used += filter(grid, cache, src, xi, exclude_self ? Index(i) : kNoSelf, r2, buf.data() + used, simd);
+                used += filter(grid, grid_positions, cache, src, xi, exclude_self ? Index(i) : kNoSelf, r2, reach2,
+                               buf.data() + used, simd, drift);
                 lists.end[i] = Index(used);
             }
             // A block holding more than a 16th above what this build needed at its peak gives
@@ -371,10 +500,13 @@ void build_slab(const UniformGrid& grid, std::span<const Vec3> grid_positions,
         const Index cap = lists.capacity;
         tbb::enumerable_thread_specific<std::vector<Index>> scratch;
         tbb::enumerable_thread_specific<CandidateCache> caches;
+        tbb::enumerable_thread_specific<DriftScratch> drifts;
+        const Real reach = std::sqrt(r2) + grid.drift(), reach2 = reach * reach;
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m, 256), [&](const auto& r) {
             Index local_max = 0;
             std::vector<Index>& found = scratch.local();
             CandidateCache& cache = caches.local();
+            DriftScratch& drift = drifts.local();
             std::int64_t known = -1;  // the next query's cell when it was looked ahead (-1: not)
             for (std::size_t q = r.begin(); q < r.end(); ++q) {
                 const Index i = subset.all ? Index(q) : subset.indices[q];
@@ -383,9 +515,10 @@ void build_slab(const UniformGrid& grid, std::span<const Vec3> grid_positions,
                 const std::int64_t next_cell =
                     q + 1 < r.end() ? grid.cell_of(query_positions[subset.all ? Index(q + 1) : subset.indices[q + 1]]) : -1;
                 known = next_cell;
-                const QuerySource src = source_for(grid, grid_positions, cache, xi, cell, next_cell);
+                const QuerySource src = source_for(grid, grid_positions, cache, xi, cell, next_cell, reach);
                 if (found.size() < src.count + NeighbourLists::kSlack) found.resize(2 * src.count + NeighbourLists::kSlack);
-                const Index c = filter(grid, cache, src, xi, exclude_self ? i : kNoSelf, r2, found.data(), simd);
+                const Index c = filter(grid, grid_positions, cache, src, xi, exclude_self ? i : kNoSelf, r2, reach2,
+                                       found.data(), simd, drift);
                 std::copy_n(found.data(), std::min(c, cap), lists.indices.data() + std::size_t(i) * cap);
                 lists.count[i] = c;
                 local_max = std::max(local_max, c);

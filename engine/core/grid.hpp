@@ -15,10 +15,12 @@
 
 namespace sph {
 
-/// @brief The candidates around a point: at most 9 contiguous ranges of sorted slots (one per
-/// x-row of the 27 surrounding cells), empty ranges left out.
+/// @brief The candidates around a point: contiguous ranges of sorted slots, one per x-row of
+/// cells (9 for the 27 surrounding cells; up to 16 for a drifted grid's wider reach), empty
+/// ranges left out.
 struct CandidateRanges {
-    std::array<Index, 9> begin{}, end{};
+    static constexpr int kMax = 16;
+    std::array<Index, kMax> begin{}, end{};
     int count = 0;
     std::size_t total = 0;  ///< candidates over all ranges
 };
@@ -47,11 +49,27 @@ public:
     /// between the build and the query.
     void build(std::span<const Vec3> positions);
 
+    /// @brief Declares that no particle has moved more than `drift` (< cell_size() / 2) since the
+    /// last build, so the grid can serve the moved particles without a rebuild (binned
+    /// stepping's sparse steps: FluidGridSystem). Its cells and coordinates stay those of the
+    /// build; for_each_candidate and build_neighbour_lists then widen their reach by `drift`,
+    /// test the candidates at the positions they are given, and return exactly what a grid
+    /// built from those positions returns, in the same order (by cell, then index). The range
+    /// queries (for_each_candidate_range, candidate_ranges) describe the grid as built. A
+    /// build resets the drift to 0.
+    void set_drift(Real drift);
+    Real drift() const { return m_drift; }
+
+    /// @brief The slot ranges of every cell within `reach` of x along each axis (reach ==
+    /// cell_size() gives the 27 cells of candidate_ranges; up to 4 x 4 rows of 4 cells while
+    /// reach < 1.5 cell_size()).
+    CandidateRanges ranges_within(const Vec3& x, Real reach) const;
+
     /// Readable slots past the last particle in sorted_index() (particle 0), and far points past
     /// the last candidate in a CandidateCache, so a vectorised loop may load a whole vector.
     static constexpr std::size_t kPadding = 16;
 
-    Eigen::Vector3i cell_coords(const Vec3& x) const {
+    [[gnu::always_inline]] Eigen::Vector3i cell_coords(const Vec3& x) const {
         Eigen::Vector3i c;
         for (int a = 0; a < 3; ++a) {
             const int v = static_cast<int>(std::floor((x[a] - m_origin[a]) * m_inv_cell));
@@ -59,7 +77,7 @@ public:
         }
         return c;
     }
-    std::int64_t cell_index(const Eigen::Vector3i& c) const {
+    [[gnu::always_inline]] std::int64_t cell_index(const Eigen::Vector3i& c) const {
         return c[0] + std::int64_t(m_dims[0]) * (c[1] + std::int64_t(m_dims[1]) * c[2]);
     }
     /// @brief The cell a point falls in (clamped to the grid).
@@ -70,6 +88,10 @@ public:
     /// built from.
     template <class Fn>
     void for_each_candidate(const Vec3& x, std::span<const Vec3> positions, Fn&& fn) const {
+        if (m_drift > 0) {  // the particles whose current cell is among the 27, in a fresh grid's order
+            for (Index j : drifted_candidates(x, positions)) fn(j, positions[j]);
+            return;
+        }
         const Eigen::Vector3i c = cell_coords(x);
         const int x0 = std::max(c[0] - 1, 0), x1 = std::min(c[0] + 1, m_dims[0] - 1);
         for (int z = std::max(c[2] - 1, 0); z <= std::min(c[2] + 1, m_dims[2] - 1); ++z)
@@ -119,12 +141,18 @@ public:
     }
 
     const Eigen::Vector3i& dims() const { return m_dims; }
+    const Vec3& origin() const { return m_origin; }
     Real cell_size() const { return m_cell; }
     std::size_t cell_count() const { return m_cells; }
     std::size_t particle_count() const { return m_count; }
     std::size_t bytes() const;
 
 private:
+    /// for_each_candidate of a drifted grid: the particles whose cell at `positions` is one of
+    /// the 27 around x, by cell and then index (a thread-local buffer, valid until the next call).
+    std::span<const Index> drifted_candidates(const Vec3& x, std::span<const Vec3> positions) const;
+
+    Real m_drift = 0;
     Vec3 m_origin = Vec3::Zero();
     Real m_cell = 1, m_inv_cell = 1;
     Eigen::Vector3i m_dims{1, 1, 1};

@@ -84,6 +84,9 @@ struct SteppingParams {
     double dt_max = 5e-3;      ///< s; upper bound on any step.
     double dt_min = 1e-7;      ///< s; a step below this stops the run with a diagnosis.
     Activation activation = Activation::Deadline;  ///< `individual` only (see Activation).
+    /// `binned` only: keep the fluid grid on steps with few due rows while no row can have moved
+    /// far (FluidGridSystem); false builds it every step. The results are the same bit for bit.
+    bool keep_grid = true;
 };
 
 /// @brief PCISPH (Solenthaler & Pajarola 2009; Ihmsen et al. 2010 Alg. 2) and its adaptive step.

@@ -35,8 +35,8 @@ inline constexpr std::array<const char*, 10> k_dfsph_keys{
 inline constexpr std::array<const char*, 2> k_boundary_params_keys{"handling", "friction"};
 inline constexpr std::array<const char*, 8> k_simulation_keys{
     "method", "stepping", "end_time", "frame_rate", "scale", "gravity", "sort_interval", "simd"};
-inline constexpr std::array<const char*, 9> k_stepping_keys{"mode",     "dt",       "lambda_v", "lambda_f", "acoustic",
-                                                     "lambda_c", "dt_max",   "dt_min",   "activation"};
+inline constexpr std::array<const char*, 10> k_stepping_keys{"mode",     "dt",       "lambda_v", "lambda_f", "acoustic",
+                                                      "lambda_c", "dt_max",   "dt_min",   "activation", "keep_grid"};
 inline constexpr std::array<const char*, 13> k_fluid_keys{
     "rest_density",      "particle_radius", "viscosity", "speed_of_sound",    "density_fluctuation", "surface_tension",
     "boundary_viscosity", "pressure_gradient", "support", "density",           "density_diffusion",

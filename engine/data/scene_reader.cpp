@@ -457,6 +457,10 @@ class Reader {
             p.acoustic = v->get<bool>();
         }
         read_number(n, "lambda_c", coefficient(), p.lambda_c);
+        if (const json* v = n.find("keep_grid")) {
+            if (!v->is_boolean()) fail(child(n.path, "keep_grid"), dump(*v), "true or false");
+            p.keep_grid = v->get<bool>();
+        }
         read_time(n, "dt_max", p.dt_max);
         read_time(n, "dt_min", p.dt_min);
         if (const json* v = n.find("activation")) p.activation = pick_enum(n.at(*v, "activation"), k_activations);

@@ -229,6 +229,7 @@ inline constexpr Counter iterations{"iterations"};            ///< solver passes
 inline constexpr Counter boundary_active{"boundary_active"};  ///< active boundary particles
 inline constexpr Counter woken{"woken"};                      ///< sleeping particles whose step the limiter cut
 inline constexpr Counter limiter_passes{"limiter_passes"};    ///< passes of the limiter to its fixed point
+inline constexpr Counter grid_kept{"grid_kept"};              ///< 1 when the fluid grid was kept (drifted), 0 when built
 }  // namespace counter
 
 }  // namespace sph

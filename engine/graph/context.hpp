@@ -79,6 +79,8 @@ public:
     /// @brief The set's row layout generation (ComponentStore::layout): a system that keeps row
     /// indices from one step to the next rebuilds them when it changes.
     std::uint64_t layout(SetId set) const { return m_world.store(set).layout(); }
+    /// @brief The set's membership generation (ComponentStore::membership).
+    std::uint64_t membership(SetId set) const { return m_world.store(set).membership(); }
     /// @brief Whether a column is allocated (optional columns of a set).
     bool has(SetId set, std::string_view component) const { return m_world.store(set).has(component); }
 

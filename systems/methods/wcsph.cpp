@@ -47,7 +47,9 @@ Recipe make_wcsph_recipe(const Scene& scene) {
     // drift, systems/integrate/drift_system.hpp).
     if (binned) r.step.push_back(std::make_unique<DriftSystem>());
     if (binned) r.step.push_back(std::make_unique<BinnedSelectSystem>(stepping.dt_min, stepping.dt_max));
-    r.step.push_back(std::make_unique<FluidGridSystem>());
+    // binned: the grid kept while the due rows are few and no row can have moved far.
+    r.step.push_back(binned && stepping.keep_grid ? std::make_unique<FluidGridSystem>(stepping)
+                                                  : std::make_unique<FluidGridSystem>());
     // binned reads only the active particles' lists: compact, the others emptied.
     r.step.push_back(std::make_unique<FluidNeighbourSystem>(individual, !binned));
     if (boundary) r.step.push_back(std::make_unique<BoundaryNeighbourSystem>(individual, !binned));

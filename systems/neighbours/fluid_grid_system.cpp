@@ -2,13 +2,55 @@
 // candidates from the 27 surrounding cells, exact test |x_i - x_j| < h.
 #include "systems/neighbours/fluid_grid_system.hpp"
 
+#include <cmath>
+
 #include "engine/data/components.hpp"
 #include "engine/data/world.hpp"
 #include "engine/graph/context.hpp"
+#include "systems/timestep/binned_state.hpp"
 
 namespace sph {
 
-Access FluidGridSystem::access() const { return Access().read(fluid(comp::position)).write(res::fluid_grid); }
-void FluidGridSystem::run(Context& ctx) { ctx.write(res::fluid_grid).build(ctx.read(fluid(comp::position))); }
+Access FluidGridSystem::access() const {
+    return Access()
+        .read(fluid(comp::position))
+        .write(res::fluid_grid)
+        .read_if(m_keep, res::active_set, res::drift_bound, res::collided)
+        .write_if(m_keep, counter::grid_kept);
+}
+
+void FluidGridSystem::register_components(World& w) {
+    if (m_keep) w.resources.add<DriftBound>(res::drift_bound.name, Lifetime::Scratch);
+}
+
+bool FluidGridSystem::kept(Context& ctx) {
+    const UniformGrid& grid = ctx.read(res::fluid_grid);
+    const std::size_t n = ctx.size(SetId::Fluid);
+    if (grid.particle_count() != n || ctx.layout(SetId::Fluid) != m_layout || !ctx.read(res::collided).empty())
+        return false;
+    if (double(ctx.read(res::active_set).size()) >= kBuildShare * double(n)) return false;
+    const DriftBound& bound = ctx.read(res::drift_bound);
+    if (bound.membership != ctx.membership(SetId::Fluid)) return false;
+    const double h = ctx.physics().h;
+    // The rounding of a drifted float position: a few units in the last place of the largest
+    // coordinate in the grid.
+    const double extent = grid.origin().cwiseAbs().maxCoeff() + double(grid.dims().maxCoeff()) * grid.cell_size();
+    const double rounding = 8 * double(std::numeric_limits<Real>::epsilon()) * extent;
+    const double drift = bound.speed(m_lambda_v, m_lambda_f, h) * to_seconds(ctx.clock().t_ticks - m_built_at) * 1.001 + rounding;
+    if (!(drift < kMaxDrift * h)) return false;
+    ctx.write(res::fluid_grid).set_drift(Real(drift));
+    return true;
+}
+
+void FluidGridSystem::run(Context& ctx) {
+    if (m_keep) {
+        const bool keep = kept(ctx);
+        ctx.write(counter::grid_kept) = keep;
+        if (keep) return;
+        m_built_at = ctx.clock().t_ticks;
+        m_layout = ctx.layout(SetId::Fluid);
+    }
+    ctx.write(res::fluid_grid).build(ctx.read(fluid(comp::position)));
+}
 
 }  // namespace sph

@@ -1,16 +1,47 @@
 #pragma once
 /// @file fluid_grid_system.hpp
-/// @brief He et al. Alg. 1 line 3 / Alg. 2 line 4, first half: the fluid grid, rebuilt every step.
+/// @brief He et al. Alg. 1 line 3 / Alg. 2 line 4, first half: the fluid grid, rebuilt every
+/// step, or (binned stepping) kept while no row can have moved far since its build.
+#include <cstdint>
+#include <limits>
+
+#include "engine/data/scene.hpp"
 #include "engine/graph/system.hpp"
 
 namespace sph {
 
 /// @brief Sorts the fluid particles into the uniform grid (cell size h).
+///
+/// With `keep` (binned stepping) a step whose due rows are few keeps the last grid instead,
+/// declaring how far any row may have moved since it was built (UniformGrid::set_drift): the
+/// speed bound of res::drift_bound (binned_state.hpp) times the time since the build, plus the
+/// rounding of a float position. The searches then return what a fresh grid returns, so a run
+/// is bit for bit the same either way. The grid is built afresh when the rows were reordered,
+/// added or restored, when the collision net moved a row off its drift in the last step, when
+/// the bound is void, when the drift would reach kMaxDrift h, or when at least a kBuildShare
+/// of the rows is due (where a fresh build and the 27-cell search cost less than the drifted
+/// search's wider reach: docs/results/benchmarks.md).
 class FluidGridSystem final : public System {
 public:
+    FluidGridSystem() = default;
+    /// @param stepping the scene's lambda_v and lambda_f (He eq. 6-7), which the drift bound needs
+    explicit FluidGridSystem(const SteppingParams& stepping)
+        : m_keep(true), m_lambda_v(stepping.lambda_v), m_lambda_f(stepping.lambda_f) {}
+    static constexpr double kMaxDrift = 0.25;    ///< of h
+    static constexpr double kBuildShare = 0.125; ///< of the rows due
     std::string name() const override { return "fluid_grid"; }
     Access access() const override;
+    void register_components(World& w) override;
     void run(Context& ctx) override;
+
+private:
+    /// Whether the grid may be kept this step; if so it is given its drift.
+    bool kept(Context& ctx);
+
+    bool m_keep = false;
+    double m_lambda_v = 0, m_lambda_f = 0;
+    std::int64_t m_built_at = 0;  ///< the clock (engine ticks) at the last build
+    std::uint64_t m_layout = std::numeric_limits<std::uint64_t>::max();  ///< the fluid rows' layout then
 };
 
 }  // namespace sph

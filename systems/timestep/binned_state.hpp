@@ -4,6 +4,7 @@
 /// the run's integer timeline (a Kept resource: checkpointed, so a resumed run continues on the
 /// same quanta) and the due-time buckets the active set is taken from (Scratch: rebuilt from
 /// the ti_end column whenever the fluid rows are reordered, added or restored).
+#include <algorithm>
 #include <cstdint>
 #include <limits>
 #include <map>
@@ -29,7 +30,31 @@ struct DueBuckets {
     int bin_lo = 0, bin_hi = 0;
 };
 
+/// @brief What bounds every fluid row's speed along its drift since the last step that evaluated
+/// every row, so that FluidGridSystem may keep its grid while no row can have moved far
+/// (UniformGrid::set_drift). An evaluated row i has Delta t_i^raw <= lambda_v h / |v_i| and
+/// <= lambda_f sqrt(h / |a_i|) (He et al. eq. 6-7, systems/timestep/global_dt_system.hpp), and a
+/// step Delta t_i <= max(Delta t_i^raw, q) (its bin is at most the raw one; bin 0 is one quantum
+/// q). Along its drift x0 + tau (v0 + tau a) (He Alg. 2 lines 20-21, tau <= Delta t_i) its speed
+/// is at most |v0| + 2 Delta t_i |a| <= (lambda_v + 2 lambda_f^2 max(1, q / dt)) h / dt with dt
+/// the shortest Delta t^raw evaluated since: BinnedStepSystem keeps dt and q, resetting them when
+/// every row is evaluated. Woken rows keep their drift with a shorter step (within the bound).
+struct DriftBound {
+    double shortest_raw = std::numeric_limits<double>::infinity();
+    double quantum = 0;  ///< the longest bin-0 step since the reset
+    /// ComponentStore::membership at the reset; a restore or added rows void the bound until
+    /// the next step that evaluates every row.
+    std::uint64_t membership = std::numeric_limits<std::uint64_t>::max();
+    /// The speed bound in m/s (infinity before the first reset).
+    double speed(double lambda_v, double lambda_f, double h) const {
+        if (!(shortest_raw > 0) || shortest_raw == std::numeric_limits<double>::infinity())
+            return std::numeric_limits<double>::infinity();
+        return (lambda_v + 2 * lambda_f * lambda_f * std::max(1.0, quantum / shortest_raw)) * h / shortest_raw;
+    }
+};
+
 namespace res {
+inline constexpr Resource<DriftBound> drift_bound{"binned.drift_bound"};
 inline constexpr Resource<BinTimeline> bin_timeline{"binned.timeline"};
 inline constexpr Resource<DueBuckets> due_buckets{"binned.due"};
 }  // namespace res

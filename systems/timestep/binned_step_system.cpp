@@ -22,7 +22,7 @@ Access BinnedStepSystem::access() const {
     return Access()
         .read(res::active_set, res::fluid_neighbours, fluid(comp::dt_raw), fluid(comp::active))
         .write(fluid(comp::bin), fluid(comp::ti_end), fluid(comp::dt), res::bin_timeline, res::due_buckets,
-               res::dt, counter::woken, counter::limiter_passes);
+               res::dt, res::drift_bound, counter::woken, counter::limiter_passes);
 }
 
 void BinnedStepSystem::register_components(World& w) {
@@ -30,6 +30,7 @@ void BinnedStepSystem::register_components(World& w) {
     w.fluid.store.add(comp::ti_end);
     w.fluid.store.add(comp::dt);
     w.fluid.store.add(comp::dt_raw);
+    w.resources.add<DriftBound>(res::drift_bound.name, Lifetime::Scratch);
 }
 
 namespace {
@@ -88,6 +89,17 @@ void BinnedStepSystem::run(Context& ctx) {
             buckets.due.clear();
             buckets.bin_lo = tl.max_bin;
             buckets.bin_hi = 0;
+        }
+        // The drift bound (binned_state.hpp): reset when every row is evaluated, else widened.
+        DriftBound& drift = ctx.write(res::drift_bound);
+        const std::uint64_t members = ctx.membership(SetId::Fluid);
+        if (set.size() == bin.size()) {
+            drift.shortest_raw = raw.lo;
+            drift.quantum = tl.quantum;
+            drift.membership = members;
+        } else if (drift.membership == members) {
+            drift.shortest_raw = std::min(drift.shortest_raw, raw.lo);
+            drift.quantum = std::max(drift.quantum, tl.quantum);
         }
     }
     const std::uint64_t now = tl.now;
