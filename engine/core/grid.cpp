@@ -53,22 +53,24 @@ void UniformGrid::set_drift(Real drift) {
     m_drift = drift;
 }
 
-CandidateRanges UniformGrid::ranges_within(const Vec3& x, Real reach) const {
+UniformGrid::WideRanges UniformGrid::ranges_within(const Vec3& x, Real reach) const {
     const Eigen::Vector3i lo = cell_coords(x - Vec3::Constant(reach)), hi = cell_coords(x + Vec3::Constant(reach));
-    CandidateRanges r;
+    WideRanges w;
+    int rows = 0;
     for (int z = lo[2]; z <= hi[2]; ++z)
         for (int y = lo[1]; y <= hi[1]; ++y) {
             const std::int64_t row = cell_index({0, y, z});
             const Index b = cell_start(row + lo[0]), e = cell_start(row + hi[0] + 1);
             if (e == b) continue;
-            if (r.count == CandidateRanges::kMax)
-                throw std::logic_error("UniformGrid::ranges_within: more than 16 rows of cells (reach too long)");
+            if (rows == 16) throw std::logic_error("UniformGrid::ranges_within: more than 16 rows of cells (reach too long)");
+            CandidateRanges& r = w.part[rows++ / 8];
             r.begin[r.count] = b;
             r.end[r.count] = e;
             ++r.count;
             r.total += e - b;
+            w.total += e - b;
         }
-    return r;
+    return w;
 }
 
 namespace {
@@ -284,7 +286,7 @@ Index filter_ranges_scalar(const UniformGrid& grid, const CandidateRanges& range
 
 /// Where one query's candidates are read from: its cell's cache, the grid's slot-ordered
 /// coordinates directly (`direct`, the 9 ranges in `ranges`), or a drifted grid's wider reach
-/// (`drifted`, up to 16 ranges).
+/// (`drifted`, the ranges in the worker's DriftScratch).
 struct QuerySource {
     bool direct = false, drifted = false;
     CandidateRanges ranges;
@@ -293,7 +295,8 @@ struct QuerySource {
 
 /// What one worker keeps for the queries of a drifted grid (filter_drifted).
 struct DriftScratch {
-    CandidateCache current;  ///< the reach's candidates at their current positions
+    UniformGrid::WideRanges ranges;  ///< the current query's reach
+    CandidateCache current;          ///< its candidates at their current positions
     std::vector<std::uint64_t> keys;
 };
 
@@ -305,12 +308,12 @@ struct DriftScratch {
 /// every list on a disordered flow, where a cell holds two or three particles.
 /// `cell` is the query's own (grid.cell_of(xi)); `reach` is the list radius plus the grid's drift.
 QuerySource source_for(const UniformGrid& grid, std::span<const Vec3> grid_positions, CandidateCache& cache,
-                       const Vec3& xi, std::int64_t cell, std::int64_t next_cell, Real reach) {
+                       DriftScratch& drift, const Vec3& xi, std::int64_t cell, std::int64_t next_cell, Real reach) {
     QuerySource q;
     if (grid.drift() > 0) {
         q.drifted = true;
-        q.ranges = grid.ranges_within(xi, reach);
-        q.count = q.ranges.total;
+        drift.ranges = grid.ranges_within(xi, reach);
+        q.count = drift.ranges.total;
         return q;
     }
     if (cell != cache.cell && next_cell != cell && grid.sorted_x() != nullptr) {
@@ -329,17 +332,20 @@ QuerySource source_for(const UniformGrid& grid, std::span<const Vec3> grid_posit
 /// a superset of those in range now; (2) those at their current positions through the filter a
 /// fresh grid's query uses (the same arithmetic, so the same borderline decisions); (3) sorted
 /// by current cell and index, a fresh grid's order.
-Index filter_drifted(const UniformGrid& grid, std::span<const Vec3> positions, const CandidateRanges& ranges,
-                     const Vec3& xi, Index self, Real r2, Real reach2, Index* dst, bool simd, DriftScratch& s) {
-    if (ranges.total == 0) return 0;
+Index filter_drifted(const UniformGrid& grid, std::span<const Vec3> positions, const Vec3& xi, Index self, Real r2,
+                     Real reach2, Index* dst, bool simd, DriftScratch& s) {
+    if (s.ranges.total == 0) return 0;
     Index m = 0;
-    if (grid.sorted_x() != nullptr) {
-        m = simd ? filter_ranges_simd(grid, ranges, xi, self, reach2, dst)
-                 : filter_ranges_scalar(grid, ranges, xi, self, reach2, dst);
-    } else {
-        const Index* sj = grid.sorted_index().data();
-        for (int r = 0; r < ranges.count; ++r)
-            for (Index k = ranges.begin[r]; k < ranges.end[r]; ++k) dst[m++] = sj[k];
+    for (const CandidateRanges& ranges : s.ranges.part) {
+        if (ranges.count == 0) continue;
+        if (grid.sorted_x() != nullptr) {
+            m += simd ? filter_ranges_simd(grid, ranges, xi, self, reach2, dst + m)
+                      : filter_ranges_scalar(grid, ranges, xi, self, reach2, dst + m);
+        } else {
+            const Index* sj = grid.sorted_index().data();
+            for (int r = 0; r < ranges.count; ++r)
+                for (Index k = ranges.begin[r]; k < ranges.end[r]; ++k) dst[m++] = sj[k];
+        }
     }
     CandidateCache& c = s.current;
     const std::size_t size = m + UniformGrid::kPadding;
@@ -371,7 +377,7 @@ Index filter_drifted(const UniformGrid& grid, std::span<const Vec3> positions, c
 Index filter(const UniformGrid& grid, std::span<const Vec3> grid_positions, const CandidateCache& cache,
              const QuerySource& q, const Vec3& xi, Index self, Real r2, Real reach2, Index* dst, bool simd,
              DriftScratch& drift) {
-    if (q.drifted) return filter_drifted(grid, grid_positions, q.ranges, xi, self, r2, reach2, dst, simd, drift);
+    if (q.drifted) return filter_drifted(grid, grid_positions, xi, self, r2, reach2, dst, simd, drift);
     if (!q.direct) return filter(cache, xi, self, r2, dst, simd);
     if (q.count == 0) return 0;
     return simd ? filter_ranges_simd(grid, q.ranges, xi, self, r2, dst) : filter_ranges_scalar(grid, q.ranges, xi, self, r2, dst);
@@ -438,7 +444,7 @@ void build_compact(const UniformGrid& grid, std::span<const Vec3> grid_positions
                 const std::int64_t next_cell = every ? (i + 1 < row_end ? grid.cell_of(query_positions[i + 1]) : -1)
                                                : (k < k_end ? grid.cell_of(query_positions[rows[k]]) : -1);
                 known = next_cell;
-                const QuerySource src = source_for(grid, grid_positions, cache, xi, cell, next_cell, reach);
+                const QuerySource src = source_for(grid, grid_positions, cache, drift, xi, cell, next_cell, reach);
                 // Room for every candidate plus a vector of slack (the vectorised filter's
                 // whole-vector stores, and the readers' whole-vector loads).
                 const std::size_t need = used + src.count + NeighbourLists::kSlack;
@@ -515,7 +521,7 @@ void build_slab(const UniformGrid& grid, std::span<const Vec3> grid_positions,
                 const std::int64_t next_cell =
                     q + 1 < r.end() ? grid.cell_of(query_positions[subset.all ? Index(q + 1) : subset.indices[q + 1]]) : -1;
                 known = next_cell;
-                const QuerySource src = source_for(grid, grid_positions, cache, xi, cell, next_cell, reach);
+                const QuerySource src = source_for(grid, grid_positions, cache, drift, xi, cell, next_cell, reach);
                 if (found.size() < src.count + NeighbourLists::kSlack) found.resize(2 * src.count + NeighbourLists::kSlack);
                 const Index c = filter(grid, grid_positions, cache, src, xi, exclude_self ? i : kNoSelf, r2, reach2,
                                        found.data(), simd, drift);

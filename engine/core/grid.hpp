@@ -15,11 +15,10 @@
 
 namespace sph {
 
-/// @brief The candidates around a point: contiguous ranges of sorted slots, one per x-row of
-/// cells (9 for the 27 surrounding cells; up to 16 for a drifted grid's wider reach), empty
-/// ranges left out.
+/// @brief The candidates around a point: at most 9 contiguous ranges of sorted slots (one per
+/// x-row of the 27 surrounding cells), empty ranges left out.
 struct CandidateRanges {
-    static constexpr int kMax = 16;
+    static constexpr int kMax = 9;
     std::array<Index, kMax> begin{}, end{};
     int count = 0;
     std::size_t total = 0;  ///< candidates over all ranges
@@ -60,10 +59,14 @@ public:
     void set_drift(Real drift);
     Real drift() const { return m_drift; }
 
-    /// @brief The slot ranges of every cell within `reach` of x along each axis (reach ==
-    /// cell_size() gives the 27 cells of candidate_ranges; up to 4 x 4 rows of 4 cells while
-    /// reach < 1.5 cell_size()).
-    CandidateRanges ranges_within(const Vec3& x, Real reach) const;
+    /// @brief The slot ranges of every cell within `reach` of x along each axis, in slot order:
+    /// up to 4 x 4 rows of up to 4 cells while reach < 1.5 cell_size(), in two parts of at most
+    /// 8 rows (reach == cell_size() gives the 27 cells of candidate_ranges).
+    struct WideRanges {
+        CandidateRanges part[2];
+        std::size_t total = 0;
+    };
+    WideRanges ranges_within(const Vec3& x, Real reach) const;
 
     /// Readable slots past the last particle in sorted_index() (particle 0), and far points past
     /// the last candidate in a CandidateCache, so a vectorised loop may load a whole vector.

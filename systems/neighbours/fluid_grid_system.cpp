@@ -15,7 +15,7 @@ Access FluidGridSystem::access() const {
     return Access()
         .read(fluid(comp::position))
         .write(res::fluid_grid)
-        .read_if(m_keep, res::active_set, res::drift_bound, res::collided)
+        .read_if(m_keep, res::drift_bound, res::collided)
         .write_if(m_keep, counter::grid_kept);
 }
 
@@ -28,8 +28,8 @@ bool FluidGridSystem::kept(Context& ctx) {
     const std::size_t n = ctx.size(SetId::Fluid);
     if (grid.particle_count() != n || ctx.layout(SetId::Fluid) != m_layout || !ctx.read(res::collided).empty())
         return false;
-    if (double(ctx.read(res::active_set).size()) >= kBuildShare * double(n)) return false;
     const DriftBound& bound = ctx.read(res::drift_bound);
+    if (double(bound.next_due) >= kBuildShare * double(n)) return false;
     if (bound.membership != ctx.membership(SetId::Fluid)) return false;
     const double h = ctx.physics().h;
     // The rounding of a drifted float position: a few units in the last place of the largest

@@ -45,6 +45,10 @@ struct DriftBound {
     /// ComponentStore::membership at the reset; a restore or added rows void the bound until
     /// the next step that evaluates every row.
     std::uint64_t membership = std::numeric_limits<std::uint64_t>::max();
+    /// The entries filed under the next due time when the last step planned it: the rows the
+    /// next step evaluates, give or take woken rows' stale entries and the rows a moving body
+    /// adds. FluidGridSystem decides on it, so that it need not wait for that step's selection.
+    std::size_t next_due = std::numeric_limits<std::size_t>::max();
     /// The speed bound in m/s (infinity before the first reset).
     double speed(double lambda_v, double lambda_f, double h) const {
         if (!(shortest_raw > 0) || shortest_raw == std::numeric_limits<double>::infinity())

@@ -269,6 +269,7 @@ void BinnedStepSystem::run(Context& ctx) {
         buckets.due.erase(it);
     }
     tl.next = buckets.due.empty() ? now + BinTimeline::length(tl.max_bin) : buckets.due.begin()->first;
+    ctx.write(res::drift_bound).next_due = buckets.due.empty() ? 0 : buckets.due.begin()->second.size();
     const Tick ticks = std::max<Tick>(1, ticks_of(tl, tl.next) - ctx.clock().t_ticks);
     s.set_clipped(2 * to_seconds(ticks), ticks, ctx.clock());
     ctx.write(counter::woken) = woken_count;
