@@ -30,7 +30,7 @@ public:
     explicit FluidGridSystem(const SteppingParams& stepping)
         : m_keep(true), m_lambda_v(stepping.lambda_v), m_lambda_f(stepping.lambda_f) {}
     static constexpr double kMaxDrift = 0.25;    ///< of h
-    static constexpr double kBuildShare = 1.0 / 32; ///< of the rows due
+    static constexpr double kBuildShare = 1.0 / 64; ///< of the rows due
     std::string name() const override { return "fluid_grid"; }
     Access access() const override;
     void register_components(World& w) override;
