@@ -33,6 +33,28 @@ const BinTimeline& timeline(const Simulation& sim) {
     return sim.world().resources.get<BinTimeline>(res::bin_timeline.name);
 }
 
+/// Two runs that must agree bit for bit: the step just taken (its dt, active set, density
+/// error and maxima). Gives a failure message for step k when they differ.
+::testing::AssertionResult same_step(const World& a, const World& b, int k) {
+    if (a.step_size.dt_ticks != b.step_size.dt_ticks) return ::testing::AssertionFailure() << "dt differs at step " << k;
+    if (a.active_set != b.active_set) return ::testing::AssertionFailure() << "active set differs at step " << k;
+    if (a.stats.rho_err_max != b.stats.rho_err_max || a.stats.a_max != b.stats.a_max || a.stats.v_max != b.stats.v_max)
+        return ::testing::AssertionFailure() << "statistics differ at step " << k;
+    return ::testing::AssertionSuccess();
+}
+
+/// The same two runs at the end, synchronised: every fluid row's x, v, rho and p, bit for bit.
+void expect_same_columns(Simulation& a, Simulation& b) {
+    a.synchronise();
+    b.synchronise();
+    const ComponentStore& ca = a.world().fluid.store;
+    const ComponentStore& cb = b.world().fluid.store;
+    for (const auto c : {comp::position, comp::velocity})
+        EXPECT_TRUE(std::equal(ca.get(c).begin(), ca.get(c).end(), cb.get(c).begin())) << c.name;
+    for (const auto c : {comp::density, comp::pressure})
+        EXPECT_TRUE(std::equal(ca.get(c).begin(), ca.get(c).end(), cb.get(c).begin())) << c.name;
+}
+
 }  // namespace
 
 // Held to one bin: dt_max = 0.2 ms is below every particle's raw step during the first 200
@@ -284,23 +306,11 @@ TEST(BinnedStepping, LazyDriftEqualsDriftingEveryRowEveryStep) {
         for (int k = 0; k < 300; ++k) {
             lazy->step();
             eager->step();
-            const World& a = lazy->world();
-            const World& b = eager->world();
-            ASSERT_EQ(a.step_size.dt_ticks, b.step_size.dt_ticks) << "step " << k;
-            ASSERT_EQ(a.active_set, b.active_set) << "step " << k;
-            ASSERT_EQ(a.stats.rho_err_max, b.stats.rho_err_max) << "step " << k;
-            ASSERT_EQ(a.stats.a_max, b.stats.a_max) << "step " << k;
-            ASSERT_EQ(a.stats.v_max, b.stats.v_max) << "step " << k;
-            const std::size_t m = a.active_set.size();
+            ASSERT_TRUE(same_step(lazy->world(), eager->world(), k));
+            const std::size_t m = lazy->world().active_set.size();
             ++paths[m <= 64 ? 0 : 128 * m < n ? 1 : 2];
         }
-        lazy->synchronise();
-        const ComponentStore& a = lazy->world().fluid.store;
-        const ComponentStore& b = eager->world().fluid.store;
-        for (const auto c : {comp::position, comp::velocity})
-            EXPECT_TRUE(std::equal(a.get(c).begin(), a.get(c).end(), b.get(c).begin())) << c.name;
-        for (const auto c : {comp::density, comp::pressure})
-            EXPECT_TRUE(std::equal(a.get(c).begin(), a.get(c).end(), b.get(c).begin())) << c.name;
+        expect_same_columns(*lazy, *eager);
         std::printf("%s: steps by active rows: <= 64: %d, < n/128: %d, more: %d\n", defaults ? "defaults" : "summation",
                     paths[0], paths[1], paths[2]);
         if (!defaults) {
@@ -336,11 +346,7 @@ TEST(BinnedStepping, KeptGridEqualsAGridBuiltEveryStep) {
             b->step();
             const World& wa = a->world();
             const World& wb = b->world();
-            ASSERT_EQ(wa.step_size.dt_ticks, wb.step_size.dt_ticks) << "step " << k;
-            ASSERT_EQ(wa.active_set, wb.active_set) << "step " << k;
-            ASSERT_EQ(wa.stats.rho_err_max, wb.stats.rho_err_max) << "step " << k;
-            ASSERT_EQ(wa.stats.a_max, wb.stats.a_max) << "step " << k;
-            ASSERT_EQ(wa.stats.v_max, wb.stats.v_max) << "step " << k;
+            ASSERT_TRUE(same_step(wa, wb, k));
             ASSERT_EQ(wa.counter_value(counter::neighbour_pairs.name), wb.counter_value(counter::neighbour_pairs.name));
             const bool keep = wa.counter_value(counter::grid_kept.name) != 0;
             kept += keep;
@@ -350,14 +356,7 @@ TEST(BinnedStepping, KeptGridEqualsAGridBuiltEveryStep) {
                 drifted += d > Real(1e-3) * wa.physics.h;
             }
         }
-        a->synchronise();
-        b->synchronise();
-        const ComponentStore& ca = a->world().fluid.store;
-        const ComponentStore& cb = b->world().fluid.store;
-        for (const auto c : {comp::position, comp::velocity})
-            EXPECT_TRUE(std::equal(ca.get(c).begin(), ca.get(c).end(), cb.get(c).begin())) << c.name;
-        for (const auto c : {comp::density, comp::pressure})
-            EXPECT_TRUE(std::equal(ca.get(c).begin(), ca.get(c).end(), cb.get(c).begin())) << c.name;
+        expect_same_columns(*a, *b);
         std::printf("%s: grid kept on %d of 400 steps (%d with a drift above 1e-3 h)\n", defaults ? "defaults" : "summation",
                     kept, drifted);
         EXPECT_GT(kept, 20);
