@@ -33,6 +33,19 @@ const BinTimeline& timeline(const Simulation& sim) {
     return sim.world().resources.get<BinTimeline>(res::bin_timeline.name);
 }
 
+/// `dam_break` in `binned` without the acoustic condition (sleeping rows from the first steps),
+/// with He et al.'s summation as the scene ships, or with the defaults a scene that states no
+/// physics gets (continuity with delta-SPH, alpha 0.01, water's nu; extrapolated walls).
+Scene binned_dam_break(bool defaults) {
+    Scene s = with_mode(load_scene(SPH_SOURCE_DIR "/scenes/dam_break.json"), SteppingMode::Binned, false);
+    if (defaults) {
+        s.fluid.density = DensityForm::Continuity;
+        s.fluid.viscosity = 0.01;
+        s.fluid.kinematic_viscosity = 1e-6;
+    }
+    return s;
+}
+
 /// Two runs that must agree bit for bit: the step just taken (its dt, active set, density
 /// error and maxima). Gives a failure message for step k when they differ.
 ::testing::AssertionResult same_step(const World& a, const World& b, int k) {
@@ -292,12 +305,7 @@ TEST(BinnedStepping, SlabWakesSleepingPool) {
 // or more: every row) ran; Drift.RowsAreTheActiveRowsAndTheirNeighbours covers the third.
 TEST(BinnedStepping, LazyDriftEqualsDriftingEveryRowEveryStep) {
     for (const bool defaults : {false, true}) {
-        Scene s = with_mode(load_scene(SPH_SOURCE_DIR "/scenes/dam_break.json"), SteppingMode::Binned, false);
-        if (defaults) {
-            s.fluid.density = DensityForm::Continuity;
-            s.fluid.viscosity = 0.01;
-            s.fluid.kinematic_viscosity = 1e-6;
-        }
+        const Scene s = binned_dam_break(defaults);
         auto lazy = make_simulation(s);
         auto eager = make_simulation(s);
         lazy->set_synchronise_observers(false);
@@ -330,12 +338,7 @@ TEST(BinnedStepping, LazyDriftEqualsDriftingEveryRowEveryStep) {
 // steps, with a drift short of its limit and longer than the rounding margin on some.
 TEST(BinnedStepping, KeptGridEqualsAGridBuiltEveryStep) {
     for (const bool defaults : {false, true}) {
-        Scene s = with_mode(load_scene(SPH_SOURCE_DIR "/scenes/dam_break.json"), SteppingMode::Binned, false);
-        if (defaults) {
-            s.fluid.density = DensityForm::Continuity;
-            s.fluid.viscosity = 0.01;
-            s.fluid.kinematic_viscosity = 1e-6;
-        }
+        const Scene s = binned_dam_break(defaults);
         Scene built = s;
         built.simulation.stepping.keep_grid = false;
         auto a = make_simulation(s);
