@@ -92,9 +92,8 @@ void insertion_sort(std::uint64_t* k, std::size_t n) {
 
 }  // namespace
 
-std::span<const Index> UniformGrid::drifted_candidates(const Vec3& x, std::span<const Vec3> positions) const {
-    thread_local std::vector<std::uint64_t> keys;
-    thread_local std::vector<Index> out;
+void UniformGrid::drifted_candidates(const Vec3& x, std::span<const Vec3> positions, std::vector<Index>& out) const {
+    thread_local std::vector<std::uint64_t> keys;  // used and done with before returning
     keys.clear();
     // A particle now in one of the 27 cells around x's was built at most one cell further out
     // (drift < cell size), so the stale cells two out are searched.
@@ -112,7 +111,6 @@ std::span<const Index> UniformGrid::drifted_candidates(const Vec3& x, std::span<
     insertion_sort(keys.data(), keys.size());
     out.resize(keys.size());
     for (std::size_t k = 0; k < keys.size(); ++k) out[k] = Index(keys[k]);
-    return out;
 }
 
 void UniformGrid::build(std::span<const Vec3> positions) {
@@ -365,9 +363,16 @@ Index filter_drifted(const UniformGrid& grid, std::span<const Vec3> positions, c
     }
     c.count = m;
     c.cell = -1;
-    const Index n = filter(c, xi, self, r2, dst, simd);
-    if (s.keys.size() < n) s.keys.resize(n);
-    for (Index k = 0; k < n; ++k) s.keys[k] = cell_key(grid.cell_of(positions[dst[k]]), dst[k]);
+    const Index found = filter(c, xi, self, r2, dst, simd);
+    // A fresh grid offers only the 27 cells around the query's (a pair just under r apart along
+    // an axis can lie two cells apart, the cell size being rounded): the same cells here.
+    if (s.keys.size() < found) s.keys.resize(found);
+    const Eigen::Vector3i cq = grid.cell_coords(xi);
+    Index n = 0;
+    for (Index k = 0; k < found; ++k) {
+        const Eigen::Vector3i cj = grid.cell_coords(positions[dst[k]]);
+        if ((cj - cq).cwiseAbs().maxCoeff() <= 1) s.keys[n++] = cell_key(grid.cell_index(cj), dst[k]);
+    }
     insertion_sort(s.keys.data(), n);
     for (Index k = 0; k < n; ++k) dst[k] = Index(s.keys[k]);
     return n;

@@ -92,7 +92,9 @@ public:
     template <class Fn>
     void for_each_candidate(const Vec3& x, std::span<const Vec3> positions, Fn&& fn) const {
         if (m_drift > 0) {  // the particles whose current cell is among the 27, in a fresh grid's order
-            for (Index j : drifted_candidates(x, positions)) fn(j, positions[j]);
+            std::vector<Index> found;  // the caller's own (fn may query again)
+            drifted_candidates(x, positions, found);
+            for (Index j : found) fn(j, positions[j]);
             return;
         }
         const Eigen::Vector3i c = cell_coords(x);
@@ -152,8 +154,8 @@ public:
 
 private:
     /// for_each_candidate of a drifted grid: the particles whose cell at `positions` is one of
-    /// the 27 around x, by cell and then index (a thread-local buffer, valid until the next call).
-    std::span<const Index> drifted_candidates(const Vec3& x, std::span<const Vec3> positions) const;
+    /// the 27 around x, by cell and then index, into `out`.
+    void drifted_candidates(const Vec3& x, std::span<const Vec3> positions, std::vector<Index>& out) const;
 
     Real m_drift = 0;
     Vec3 m_origin = Vec3::Zero();

@@ -30,12 +30,16 @@ bool FluidGridSystem::kept(Context& ctx) {
         return false;
     const DriftBound& bound = ctx.read(res::drift_bound);
     if (double(bound.next_due) >= kBuildShare * double(n)) return false;
-    if (bound.membership != ctx.membership(SetId::Fluid)) return false;
+    // The bound holds over the time since its reset: one reset after the build (a step that
+    // evaluated every row while the grid was kept, e.g. rows a moving body made due) does not
+    // cover the drift before it.
+    if (bound.membership != ctx.membership(SetId::Fluid) || bound.reset_at > m_built_at) return false;
     const double h = ctx.physics().h;
-    // The rounding of a drifted float position: a few units in the last place of the largest
-    // coordinate in the grid.
+    // The rounding of a drifted float position, a few units in the last place of the largest
+    // coordinate in the grid, for each step since the build (a row evaluated at a step starts
+    // its next drift from its rounded position).
     const double extent = grid.origin().cwiseAbs().maxCoeff() + double(grid.dims().maxCoeff()) * grid.cell_size();
-    const double rounding = 8 * double(std::numeric_limits<Real>::epsilon()) * extent;
+    const double rounding = 8 * double(std::numeric_limits<Real>::epsilon()) * extent * double(++m_steps_kept + 1);
     const double drift = bound.speed(m_lambda_v, m_lambda_f, h) * to_seconds(ctx.clock().t_ticks - m_built_at) * 1.001 + rounding;
     if (!(drift < kMaxDrift * h)) return false;
     ctx.write(res::fluid_grid).set_drift(Real(drift));
@@ -49,6 +53,7 @@ void FluidGridSystem::run(Context& ctx) {
         if (keep) return;
         m_built_at = ctx.clock().t_ticks;
         m_layout = ctx.layout(SetId::Fluid);
+        m_steps_kept = 0;
     }
     ctx.write(res::fluid_grid).build(ctx.read(fluid(comp::position)));
 }

@@ -15,8 +15,10 @@ namespace sph {
 /// With `keep` (binned stepping) a step whose due rows are few keeps the last grid instead,
 /// declaring how far any row may have moved since it was built (UniformGrid::set_drift): the
 /// speed bound of res::drift_bound (binned_state.hpp) times the time since the build, plus the
-/// rounding of a float position. The searches then return what a fresh grid returns, so a run
-/// is bit for bit the same either way. The grid is built afresh when the rows were reordered,
+/// rounding of a float position for each step since. A bound reset after the build (a step that
+/// evaluated every row while the grid was kept) does not cover the time before it: built afresh.
+/// The searches then return what a fresh grid returns, so a run is bit for bit the same either
+/// way. The grid is built afresh when the rows were reordered,
 /// added or restored, when the collision net moved a row off its drift in the last step, when
 /// the bound is void, when the drift would reach kMaxDrift h, or when at least a kBuildShare
 /// of the rows is due (where a fresh build and the 27-cell search cost less than the drifted
@@ -44,6 +46,7 @@ private:
     double m_lambda_v = 0, m_lambda_f = 0;
     std::int64_t m_built_at = 0;  ///< the clock (engine ticks) at the last build
     std::uint64_t m_layout = std::numeric_limits<std::uint64_t>::max();  ///< the fluid rows' layout then
+    int m_steps_kept = 0;  ///< steps that kept it since
 };
 
 }  // namespace sph

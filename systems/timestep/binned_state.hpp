@@ -45,6 +45,9 @@ struct DriftBound {
     /// ComponentStore::membership at the reset; a restore or added rows void the bound until
     /// the next step that evaluates every row.
     std::uint64_t membership = std::numeric_limits<std::uint64_t>::max();
+    /// The engine tick of the reset: the bound covers the drift since then only, so a grid
+    /// built before it may not be kept on it.
+    std::int64_t reset_at = 0;
     /// The entries filed under the next due time when the last step planned it: the rows the
     /// next step evaluates, give or take woken rows' stale entries and the rows a moving body
     /// adds. FluidGridSystem decides on it, so that it need not wait for that step's selection.

@@ -97,6 +97,7 @@ void BinnedStepSystem::run(Context& ctx) {
             drift.shortest_raw = raw.lo;
             drift.quantum = tl.quantum;
             drift.membership = members;
+            drift.reset_at = ctx.clock().t_ticks;
         } else if (drift.membership == members) {
             drift.shortest_raw = std::min(drift.shortest_raw, raw.lo);
             drift.quantum = std::max(drift.quantum, tl.quantum);
