@@ -5,14 +5,10 @@
 #include "engine/data/components.hpp"
 #include "engine/data/world.hpp"
 #include "engine/graph/context.hpp"
+#include "systems/neighbours/fluid_neighbours_system.hpp"
 
 namespace sph {
 
-namespace {
-QuerySubset subset_of(const Context& ctx, bool individual, bool keep_others) {
-    return individual ? QuerySubset{ctx.read(res::active_set), false, keep_others} : QuerySubset{};
-}
-}  // namespace
 
 Access BoundaryNeighbourSystem::access() const {
     return Access()
@@ -24,7 +20,7 @@ Access BoundaryNeighbourSystem::access() const {
 void BoundaryNeighbourSystem::run(Context& ctx) {
     build_neighbour_lists(ctx.read(res::boundary_grid), ctx.read(boundary(comp::position)), ctx.read(fluid(comp::position)),
                           ctx.physics().h, false,
-                          subset_of(ctx, m_individual, m_keep_others), ctx.write(res::boundary_neighbours), ctx.physics().simd);
+                          active_query_subset(ctx, m_individual, m_keep_others), ctx.write(res::boundary_neighbours), ctx.physics().simd);
     if (m_individual && m_keep_others) {  // He's scheme: the work counter of the rows built
         const NeighbourLists& lists = ctx.read(res::boundary_neighbours);
         std::uint64_t entries = 0;

@@ -8,11 +8,9 @@
 
 namespace sph {
 
-namespace {
-QuerySubset subset_of(const Context& ctx, bool individual, bool keep_others) {
+QuerySubset active_query_subset(const Context& ctx, bool individual, bool keep_others) {
     return individual ? QuerySubset{ctx.read(res::active_set), false, keep_others} : QuerySubset{};
 }
-}  // namespace
 
 Access FluidNeighbourSystem::access() const {
     return Access()
@@ -22,7 +20,7 @@ Access FluidNeighbourSystem::access() const {
 }
 // He Alg. 2 lines 3-4: fresh lists for the active particles only; the others keep theirs.
 void FluidNeighbourSystem::run(Context& ctx) {
-    const QuerySubset subset = subset_of(ctx, m_individual, m_keep_others);
+    const QuerySubset subset = active_query_subset(ctx, m_individual, m_keep_others);
     const auto x = ctx.read(fluid(comp::position));
     build_neighbour_lists(ctx.read(res::fluid_grid), x, x, ctx.physics().h, true, subset, ctx.write(res::fluid_neighbours),
                           ctx.physics().simd);

@@ -21,13 +21,9 @@
 
 namespace sph {
 
-namespace {
-constexpr ColumnRef<Vec3> x_pred = fluid(comp::predicted_position);
-}  // namespace
-
 Access PcisphBoundaryDensitySystem::access() const {
     return Access()
-        .read(x_pred, res::boundary_active, boundary(comp::position), boundary(comp::self_density), res::pcisph_delta)
+        .read(fluid(comp::predicted_position), res::boundary_active, boundary(comp::position), boundary(comp::self_density), res::pcisph_delta)
         .write(boundary(comp::density), boundary(comp::pressure));
 }
 

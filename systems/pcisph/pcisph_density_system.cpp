@@ -18,13 +18,9 @@
 
 namespace sph {
 
-namespace {
-constexpr ColumnRef<Vec3> x_pred = fluid(comp::predicted_position);
-}  // namespace
-
 Access PcisphDensitySystem::access() const {
     return Access()
-        .read(x_pred, res::fluid_neighbours, res::pcisph_delta)
+        .read(fluid(comp::predicted_position), res::fluid_neighbours, res::pcisph_delta)
         .write(fluid(comp::density), fluid(comp::pressure), fluid(comp::pressure_term), res::pcisph_errors)
         .read_if(m_ihmsen, res::boundary_neighbours, boundary(comp::position), boundary(comp::mass));
 }

@@ -14,14 +14,10 @@
 
 namespace sph {
 
-namespace {
-constexpr ColumnRef<Vec3> x_pred = fluid(comp::predicted_position);
-}  // namespace
-
 Access PcisphPredictSystem::access() const {
     return Access()
         .read(fluid(comp::position), fluid(comp::velocity), fluid(comp::pressure_acceleration), res::dt)
-        .write(x_pred)
+        .write(fluid(comp::predicted_position))
         .read_if(m_nonpressure, fluid(comp::nonpressure_acceleration));
 }
 
