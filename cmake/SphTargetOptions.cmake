@@ -23,11 +23,10 @@ function(sph_target_options target)
   endif()
 endfunction()
 
-# Precompiled headers (SPH_PCH): the standard, oneTBB, Eigen, nlohmann-json and spdlog headers
-# every translation unit parses, and the engine's World, are parsed once per target instead of
-# once per source (about 5 of a test file's 8-15 s of compile time). PRIVATE: a program linking
-# the installed engine sees nothing of it. Highway is left out: its per-target sources
-# re-include themselves under other macros.
+# Precompiled headers (SPH_PCH; the tests share one): the standard, oneTBB, Eigen, nlohmann-json
+# and spdlog headers most sources parse, compiled once instead of once per test executable.
+# PRIVATE: a program linking the installed engine sees nothing of it. Highway is left out: its
+# dispatch sources re-include themselves under other macros.
 set(SPH_PCH_HEADERS <algorithm> <array> <cmath> <cstdint> <cstring> <filesystem> <functional>
     <limits> <map> <memory> <optional> <span> <string> <string_view> <vector>
     <Eigen/Core> <Eigen/Geometry> <nlohmann/json.hpp> <spdlog/spdlog.h>
