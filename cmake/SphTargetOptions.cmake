@@ -22,26 +22,3 @@ function(sph_target_options target)
     target_compile_definitions(${target} PUBLIC SPH_ENABLE_ASSERTS=1)
   endif()
 endfunction()
-
-# Precompiled headers (SPH_PCH; the tests share one): the standard, oneTBB, Eigen, nlohmann-json
-# and spdlog headers most sources parse, compiled once instead of once per test executable.
-# PRIVATE: a program linking the installed engine sees nothing of it. Highway is left out: its
-# dispatch sources re-include themselves under other macros.
-set(SPH_PCH_HEADERS <algorithm> <array> <cmath> <cstdint> <cstring> <filesystem> <functional>
-    <limits> <map> <memory> <optional> <span> <string> <string_view> <vector>
-    <Eigen/Core> <Eigen/Geometry> <nlohmann/json.hpp> <spdlog/spdlog.h>
-    <tbb/blocked_range.h> <tbb/parallel_for.h> <tbb/parallel_reduce.h> <tbb/enumerable_thread_specific.h>)
-
-# Gives `target` the precompiled headers above plus `extra`, or, with REUSE_FROM, the
-# precompiled header of another target compiled with the same flags (the tests share one).
-function(sph_precompile target)
-  cmake_parse_arguments(arg "" "REUSE_FROM" "EXTRA" ${ARGN})
-  if(NOT SPH_PCH)
-    return()
-  endif()
-  if(arg_REUSE_FROM)
-    target_precompile_headers(${target} REUSE_FROM ${arg_REUSE_FROM})
-  else()
-    target_precompile_headers(${target} PRIVATE ${SPH_PCH_HEADERS} ${arg_EXTRA})
-  endif()
-endfunction()

@@ -9,7 +9,6 @@
 
 namespace sph {
 
-
 Access BoundaryNeighbourSystem::access() const {
     return Access()
         .read(fluid(comp::position), boundary(comp::position), res::boundary_grid)
