@@ -31,33 +31,66 @@ Simulation::Simulation(const Scene& scene, Recipe recipe) {
 
 namespace {
 
-/// Index of the first non-finite element of a column, or n; only the listed rows when `rows`
-/// is given (ascending, so the first found is still the lowest index).
-template <class T>
-std::size_t first_non_finite(std::span<const T> v, const std::vector<Index>* rows) {
-    const std::size_t n = v.size(), m = rows ? rows->size() : n;
+/// Rows per task of the checks, and rows per branch-free block inside a task: a block is
+/// tested without an early exit (so the compiler can keep it in vector registers) and only a
+/// block that holds an offender is searched row by row.
+constexpr std::size_t kCheckGrain = 8192, kCheckBlock = 256;
+
+bool finite(Real v) { return std::isfinite(v); }
+bool finite(double v) { return std::isfinite(v); }
+bool finite(const Vec3& v) { return std::isfinite(v[0]) & std::isfinite(v[1]) & std::isfinite(v[2]); }
+
+/// The first row, by position in `rows` (ascending, so also the lowest index) or by index when
+/// `rows` is null, at which `bad(i)` holds; n (the column's length) when none does.
+template <class Bad>
+std::size_t first_row(std::size_t n, const std::vector<Index>* rows, Bad bad) {
+    const std::size_t m = rows ? rows->size() : n;
+    const auto row = [&](std::size_t k) { return rows ? std::size_t((*rows)[k]) : k; };
     const std::size_t k = tbb::parallel_reduce(
-        tbb::blocked_range<std::size_t>(0, m, 8192), m,
+        tbb::blocked_range<std::size_t>(0, m, kCheckGrain), m,
         [&](const auto& r, std::size_t best) {
-            for (std::size_t k = r.begin(); k < r.end() && k < best; ++k) {
-                const std::size_t i = rows ? (*rows)[k] : k;
-                if constexpr (std::is_same_v<T, Vec3>) {
-                    if (!v[i].allFinite()) return k;
-                } else {
-                    if (!std::isfinite(v[i])) return k;
-                }
+            for (std::size_t b = r.begin(); b < r.end() && b < best; b += kCheckBlock) {
+                const std::size_t e = std::min(r.end(), b + kCheckBlock);
+                bool any = false;
+                for (std::size_t k = b; k < e; ++k) any |= bad(row(k));
+                if (!any) continue;
+                for (std::size_t k = b; k < e; ++k)
+                    if (bad(row(k))) return std::min(best, k);
             }
             return best;
         },
         [](std::size_t a, std::size_t b) { return std::min(a, b); });
-    return k == m ? n : (rows ? (*rows)[k] : k);
+    return k == m ? n : row(k);
 }
+
+/// The domain in single precision, so that a Real position is tested without a conversion:
+/// lo is the smallest float >= the double bound and hi the largest <= it, which makes
+/// x >= lo exactly when double(x) >= min (Aabb::contains), and likewise for hi.
+struct RealBox {
+    Vec3 lo, hi;
+    explicit RealBox(const Aabb& d) {
+        constexpr Real inf = std::numeric_limits<Real>::infinity();
+        for (int a = 0; a < 3; ++a) {
+            lo[a] = Real(d.min[a]);
+            if (double(lo[a]) < d.min[a]) lo[a] = std::nextafter(lo[a], inf);
+            hi[a] = Real(d.max[a]);
+            if (double(hi[a]) > d.max[a]) hi[a] = std::nextafter(hi[a], -inf);
+        }
+    }
+    /// False for a non-finite position too (every comparison with NaN is false).
+    bool contains(const Vec3& x) const {
+        return (x[0] >= lo[0]) & (x[0] <= hi[0]) & (x[1] >= lo[1]) & (x[1] <= hi[1]) & (x[2] >= lo[2]) &
+               (x[2] <= hi[2]);
+    }
+};
 
 }  // namespace
 
 void Simulation::trace_non_finite(std::size_t system) {
-    // Cheap (a streaming read of the columns just written, ~1 % of a step) and it is what lets
-    // a NaN be reported with the system that produced it rather than the one that carried it.
+    // A streaming read of the columns just written, on the rows written (a few per cent of a
+    // sparse step), and what lets a NaN be reported with the system that produced it rather
+    // than the one that carried it, and a particle that left the domain with the system that
+    // moved it.
     const ComponentStore& store = m_world.fluid.store;
     const Access& access = m_graph->access(system);
     // A system that declares its rows (Access::rows) is checked there only.
@@ -65,23 +98,43 @@ void Simulation::trace_non_finite(std::size_t system) {
     if (access.written_rows() == key_of(res::active_set)) rows = &m_world.active_set;
     if (access.written_rows() == key_of(res::collided)) rows = &m_world.collided;
     if (access.written_rows() == key_of(res::drifted)) rows = &m_world.drifted;
+    const std::size_t n = store.size();
+    // Recipe order is a topological order of the graph: a value can only reach a later system,
+    // so the earliest one with a non-finite output is where it was produced.
+    auto record = [&](Fault& f, std::size_t particle, const std::string& col) {
+        std::lock_guard lock(m_trace_mutex);
+        if (system < f.system) f = Fault{system, particle, col};
+    };
     for (const auto& wr : access.writes()) {
         if (wr.rfind("fluid.", 0) != 0) continue;
         const std::string col = wr.substr(6);
         if (!store.has(col)) continue;
         const std::type_info& t = store.type_of(col);
-        std::size_t bad = store.size();
-        if (t == typeid(Vec3))
-            bad = first_non_finite(store.get(Component<Vec3>{col}), rows);
-        else if (t == typeid(Real))
-            bad = first_non_finite(store.get(Component<Real>{col}), rows);
-        else if (t == typeid(double))
-            bad = first_non_finite(store.get(Component<double>{col}), rows);
-        if (bad == store.size()) continue;
-        std::lock_guard lock(m_trace_mutex);
-        // Recipe order is a topological order of the graph: a value can only reach a later
-        // system, so the earliest one with a non-finite output is where it was produced.
-        if (system < m_non_finite.system) m_non_finite = NonFinite{system, bad, col};
+        std::size_t bad = n;
+        if (col == comp::position.name) {
+            // One read for both checks: a position outside the domain or not finite.
+            const auto x = store.get(comp::position);
+            const RealBox box(m_world.domain);
+            bad = first_row(n, rows, [&](std::size_t i) { return !box.contains(x[i]); });
+            if (bad == n) continue;
+            if (finite(x[bad])) {
+                record(m_outside, bad, col);
+                // A non-finite position further on outranks it (the rare path: a second read).
+                bad = first_row(n, rows, [&](std::size_t i) { return !finite(x[i]); });
+                if (bad == n) continue;
+            }
+        } else if (t == typeid(Vec3)) {
+            const auto v = store.get(Component<Vec3>{col});
+            bad = first_row(n, rows, [&](std::size_t i) { return !finite(v[i]); });
+        } else if (t == typeid(Real)) {
+            const auto v = store.get(Component<Real>{col});
+            bad = first_row(n, rows, [&](std::size_t i) { return !finite(v[i]); });
+        } else if (t == typeid(double)) {
+            const auto v = store.get(Component<double>{col});
+            bad = first_row(n, rows, [&](std::size_t i) { return !finite(v[i]); });
+        }
+        if (bad == n) continue;
+        record(m_non_finite, bad, col);
         return;
     }
 }
@@ -132,7 +185,7 @@ void Simulation::step_once() {
     const int interval = m_world.scene.simulation.sort_interval;
     if (interval > 0 && m_world.clock.step % interval == 0) spatial_sort();
     if (m_ring) m_ring->save(m_world);
-    m_non_finite = NonFinite{};
+    m_non_finite = m_outside = Fault{};
     m_graph->run();
     m_behind = bool(m_world.synchronise);  // a lazy recipe leaves the sleeping rows behind
     m_last = StepRecord{m_world.clock.step, m_world.clock.t, m_world.step_size.dt, m_world.step_size.dt_stable, false};
@@ -213,78 +266,55 @@ bool Simulation::advance(double end_time, const std::function<void(const Simulat
 }
 
 void Simulation::check_step() {
+    // The rows each system wrote were checked when it ran (trace_non_finite): every position
+    // written is finite and inside the domain, every other column written is finite. What
+    // remains is the step size.
     World& w = m_world;
-    const auto x = w.fluid.store.get(comp::position);
-    const auto v = w.fluid.store.get(comp::velocity);
-    const Aabb& d = w.domain;
-    // First offending particle by index (deterministic), or n when all are fine.
-    const std::size_t n = x.size();
-    const std::size_t bad = tbb::parallel_reduce(
-        tbb::blocked_range<std::size_t>(0, n, 4096), n,
-        [&](const auto& r, std::size_t best) {
-            for (std::size_t i = r.begin(); i < r.end() && i < best; ++i) {
-                const bool finite = x[i].allFinite() && v[i].allFinite();
-                const Vec3d p = x[i].template cast<double>();
-                if (!finite || !d.contains(p)) return i;
-            }
-            return best;
-        },
-        [](std::size_t a, std::size_t b) { return std::min(a, b); });
     const double dt = w.step_size.dt;
     const auto& st = w.scene.simulation.stepping;
     const auto& systems = m_graph->systems();
-    const bool traced = m_non_finite.system < systems.size();
-    if (bad == n && !traced) {
-        const double stable = w.step_size.dt_stable > 0 ? w.step_size.dt_stable : dt;  // a clipped last step is fine
-        if (!(stable >= st.dt_min) || !std::isfinite(dt)) {
-            std::ostringstream os;
-            os << "time step collapsed at step " << w.clock.step << " (t = " << w.clock.t << " s): dt = " << stable
-               << " s from system '" << step_size_owner() << "' is below dt_min = " << st.dt_min << " s; ";
-            // What can limit a step, each with its own figure (a sound speed that is too high is
-            // not an acceleration problem, and with no particle there is no particle to name).
-            if (n == 0) {
-                os << "there is no fluid particle yet, so no particle's velocity or acceleration limits it: the "
-                      "scene's own figures do (gravity "
-                   << w.physics.gravity.norm() << " m/s^2, speed of sound " << w.physics.speed_of_sound
-                   << " m/s, h / c_s = " << w.physics.h / w.physics.speed_of_sound << " s)";
-            } else {
-                os << "the fastest particle moves at v_max = " << w.stats.v_max
-                   << " m/s, the largest acceleration is " << w.stats.a_max << " m/s^2 at particle "
-                   << w.stats.a_max_particle << ", the speed of sound is " << w.physics.speed_of_sound
-                   << " m/s (h / c_s = " << w.physics.h / w.physics.speed_of_sound << " s)";
-            }
-            throw SimulationError(os.str(), w.stats.a_max_particle, w.clock.step, step_size_owner());
-        }
-        return;
-    }
+    const std::size_t n = w.fluid.store.size();
+    const auto id_of = [&](std::size_t row) {
+        return w.fluid.store.has(comp::id.name) ? w.fluid.store.get(comp::id)[row] : std::uint32_t(row);
+    };
     std::ostringstream os;
-    std::string culprit = "unknown";
-    if (!traced && x[bad].allFinite() && v[bad].allFinite()) {
-        const std::uint32_t id = w.fluid.store.has(comp::id.name) ? w.fluid.store.get(comp::id)[bad] : std::uint32_t(bad);
-        // Left the domain: the last system that wrote positions moved it.
-        for (std::size_t i = 0; i < systems.size(); ++i)
-            if (m_graph->access(i).may_write(key_of(fluid(comp::position)))) culprit = systems[i]->name();
+    if (m_non_finite.system < systems.size()) {
+        // Non-finite: the earliest system (in recipe order) whose output held a non-finite
+        // value produced it; that value's particle is the one named.
+        const std::string culprit = systems[m_non_finite.system]->name();
+        const std::uint32_t pid = id_of(m_non_finite.particle);
+        os << "particle " << pid << " became non-finite at step " << w.clock.step << " (t = " << w.clock.t
+           << " s): " << m_non_finite.column << " is NaN or infinite, first produced by system '" << culprit << "'";
+        throw SimulationError(os.str(), pid, w.clock.step, culprit);
+    }
+    if (m_outside.system < systems.size()) {
+        // Left the domain: named with the system that moved it there.
+        const std::string culprit = systems[m_outside.system]->name();
+        const std::uint32_t id = id_of(m_outside.particle);
+        const Vec3 x = w.fluid.store.get(comp::position)[m_outside.particle];
+        const Aabb& d = w.domain;
         os << "particle " << id << " left the domain at step " << w.clock.step << " (t = " << w.clock.t
-           << " s): position (" << x[bad].transpose() << ") is outside [" << d.min.transpose() << "] - ["
+           << " s): position (" << x.transpose() << ") is outside [" << d.min.transpose() << "] - ["
            << d.max.transpose() << "], moved by system '" << culprit << "'";
         throw SimulationError(os.str(), id, w.clock.step, culprit);
     }
-    {
-        // Non-finite: traced while the step ran to the earliest system (in recipe order) whose
-        // output held a non-finite value; that value's particle is the one named.
-        std::size_t particle = bad;
-        std::string field = "position/velocity";
-        if (traced) {
-            culprit = systems[m_non_finite.system]->name();
-            particle = m_non_finite.particle;
-            field = m_non_finite.column;
-        }
-        const std::uint32_t pid =
-            w.fluid.store.has(comp::id.name) ? w.fluid.store.get(comp::id)[particle] : std::uint32_t(particle);
-        os << "particle " << pid << " became non-finite at step " << w.clock.step << " (t = " << w.clock.t
-           << " s): " << field << " is NaN or infinite, first produced by system '" << culprit << "'";
-        throw SimulationError(os.str(), pid, w.clock.step, culprit);
+    const double stable = w.step_size.dt_stable > 0 ? w.step_size.dt_stable : dt;  // a clipped last step is fine
+    if (stable >= st.dt_min && std::isfinite(dt)) return;
+    os << "time step collapsed at step " << w.clock.step << " (t = " << w.clock.t << " s): dt = " << stable
+       << " s from system '" << step_size_owner() << "' is below dt_min = " << st.dt_min << " s; ";
+    // What can limit a step, each with its own figure (a sound speed that is too high is not an
+    // acceleration problem, and with no particle there is no particle to name).
+    if (n == 0) {
+        os << "there is no fluid particle yet, so no particle's velocity or acceleration limits it: the "
+              "scene's own figures do (gravity "
+           << w.physics.gravity.norm() << " m/s^2, speed of sound " << w.physics.speed_of_sound
+           << " m/s, h / c_s = " << w.physics.h / w.physics.speed_of_sound << " s)";
+    } else {
+        os << "the fastest particle moves at v_max = " << w.stats.v_max << " m/s, the largest acceleration is "
+           << w.stats.a_max << " m/s^2 at particle " << w.stats.a_max_particle << ", the speed of sound is "
+           << w.physics.speed_of_sound << " m/s (h / c_s = " << w.physics.h / w.physics.speed_of_sound << " s)";
     }
+    throw SimulationError(os.str(), w.stats.a_max_particle, w.clock.step, step_size_owner());
 }
 
 }  // namespace sph

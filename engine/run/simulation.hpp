@@ -88,8 +88,9 @@ private:
     void give_wave_if_due();
     void check_step();
     void spatial_sort();
-    /// Scans the fluid columns system i writes for non-finite values (NaN, inf) and keeps
-    /// the earliest system in recipe order that produced one this step.
+    /// Scans the fluid columns system i writes, on the rows it declares (Access::rows), for
+    /// non-finite values (NaN, inf) and positions outside the domain, and keeps the earliest
+    /// system in recipe order that produced each this step.
     void trace_non_finite(std::size_t system);
 
     /// Serves a rollback request after the graph ran: restores the ring, keeps the record.
@@ -102,14 +103,15 @@ private:
     StepRecord m_last;
     std::size_t m_rollback_steps = 0;
     std::unique_ptr<StateRing> m_ring;
-    /// The first non-finite value of the step: system (recipe index), particle, column.
-    struct NonFinite {
+    /// A fault of the step: system (recipe index), particle (row), column.
+    struct Fault {
         std::size_t system = SIZE_MAX;
         std::size_t particle = 0;
         std::string column;
     };
     std::mutex m_trace_mutex;
-    NonFinite m_non_finite;
+    Fault m_non_finite;  ///< the first non-finite value
+    Fault m_outside;     ///< the first position outside the domain
 };
 
 }  // namespace sph
