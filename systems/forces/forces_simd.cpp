@@ -5,7 +5,10 @@
 // Pi_ib with rho_b = rho0 and v_ib = v_i - v_b), and He eq. 5's drho_i/dt =
 // sum_j m_j v_ij . grad W_ij + sum_b psi_b v_ib . grad W_ib: the formulas of forces_system.cpp,
 // vectorised across each particle's neighbour list (positions, velocities, densities and
-// pressures gathered). p_i / rho_i^2 is hoisted out of the pair loop.
+// pressures gathered). p_i / rho_i^2 is hoisted out of the pair loop. With the corrected
+// gradient (Bonet & Lok 1999), -m_j P_ij (L_i + L_j)/2 grad W_ij splits into an L_j half per
+// pair (L_j gathered) and an L_i half applied once per row to the summed P_ij grad W_ij; against
+// the boundary, psi_b P_ib L_i grad W_ib joins that sum (P: the pressure coefficient).
 #include "engine/core/simd_targets.hpp"
 
 #undef HWY_TARGET_INCLUDE
@@ -44,6 +47,17 @@ HWY_INLINE void store_sum3(D d, const Broadcast3<D>& a, const Real* g, Real* out
     out[2] = hn::GetLane(hn::SumOfLanes(d, a.z)) + (g ? g[2] : Real(0));
 }
 
+/// L_j g of the chunk's neighbours, L_j gathered from 9 Reals per particle (column-major:
+/// (L g)_r = sum_c L[3 c + r] g_c).
+template <class D>
+HWY_INLINE Broadcast3<D> gathered_times(D d, const Real* L, const PairChunk<D>& c, const Broadcast3<D>& g) {
+    const auto j9 = hn::Add(hn::ShiftLeft<1>(c.j3), c.j3);
+    const auto l = [&](int k) { return hn::GatherIndex(d, L + k, j9); };
+    return {hn::MulAdd(l(0), g.x, hn::MulAdd(l(3), g.y, hn::Mul(l(6), g.z))),
+            hn::MulAdd(l(1), g.x, hn::MulAdd(l(4), g.y, hn::Mul(l(7), g.z))),
+            hn::MulAdd(l(2), g.x, hn::MulAdd(l(5), g.y, hn::Mul(l(8), g.z)))};
+}
+
 /// v_i - v_j of the chunk's neighbours (velocities gathered from the xyz rows at `v`; none: v_i).
 template <class D>
 HWY_INLINE Broadcast3<D> relative_velocity(D d, const Broadcast3<D>& vi, const Real* v, const PairChunk<D>& c) {
@@ -65,6 +79,8 @@ void ForceRows(const ForcePairArgs& a, const Index* rows, std::size_t begin, std
     const bool viscous = a.alpha > 0, viscous_b = a.alpha_b > 0;
     const bool laminar = a.nu4 > 0, laminar_b = laminar && a.alpha_b_laminar;
     const auto nu4 = hn::Set(d, a.nu4);
+    const bool corrected = a.L != nullptr;
+    const auto half_m = hn::Set(d, Real(0.5) * a.mass);
     const bool sparse = rows_are_sparse(rows, begin, end);
     for (std::size_t q = begin; q < end; ++q) {
         const Index i = rows ? rows[q] : Index(q);
@@ -76,6 +92,7 @@ void ForceRows(const ForcePairArgs& a, const Index* rows, std::size_t begin, std
         const auto pi = hn::Set(d, pi_s);
         const auto vrhoi = hn::Set(d, rhoi);
         Broadcast3<D> acc{hn::Zero(d), hn::Zero(d), hn::Zero(d)};
+        Broadcast3<D> li_sum{hn::Zero(d), hn::Zero(d), hn::Zero(d)};  // corrected: what L_i multiplies
         auto div = hn::Zero(d);
         const Index* list = a.fluid->of(i).data();
         const std::size_t count = a.fluid->size_of(Index(i));
@@ -84,11 +101,25 @@ void ForceRows(const ForcePairArgs& a, const Index* rows, std::size_t begin, std
             const auto s = hn::IfThenElseZero(c.in, k.grad_factor(d, hn::Sqrt(c.r2)));
             const Broadcast3<D> vij = relative_velocity(d, vi, a.v, c);
             const auto rhoj = hn::GatherIndex(d, a.rho, c.j);
-            auto coef = hn::Add(pi, hn::Div(hn::GatherIndex(d, a.p, c.j), hn::Mul(rhoj, rhoj)));
-            if (viscous)
-                coef = hn::Add(coef, monaghan(dot3(vij.x, vij.y, vij.z, c.dx, c.dy, c.dz), c.r2, alpha_2hc,
-                                              hn::Add(vrhoi, rhoj), eps_h2));
-            const Broadcast3<D> g = subtract_along_gradient(c, s, hn::IfThenElseZero(c.in, hn::Mul(m, coef)), acc);
+            const auto pcoef = hn::Add(pi, hn::Div(hn::GatherIndex(d, a.p, c.j), hn::Mul(rhoj, rhoj)));
+            const auto visc = viscous ? monaghan(dot3(vij.x, vij.y, vij.z, c.dx, c.dy, c.dz), c.r2, alpha_2hc,
+                                                 hn::Add(vrhoi, rhoj), eps_h2)
+                                      : hn::Zero(d);
+            Broadcast3<D> g;
+            if (!corrected) {
+                g = subtract_along_gradient(c, s, hn::IfThenElseZero(c.in, hn::Mul(m, hn::Add(pcoef, visc))), acc);
+            } else {
+                // the viscosity along grad W_ij; m P_ij / 2 times L_j grad W_ij here, times L_i later
+                g = subtract_along_gradient(c, s, hn::IfThenElseZero(c.in, hn::Mul(m, visc)), acc);
+                const auto w = hn::IfThenElseZero(c.in, hn::Mul(half_m, pcoef));
+                const Broadcast3<D> lg = gathered_times(d, a.L, c, g);
+                acc.x = hn::NegMulAdd(w, lg.x, acc.x);
+                acc.y = hn::NegMulAdd(w, lg.y, acc.y);
+                acc.z = hn::NegMulAdd(w, lg.z, acc.z);
+                li_sum.x = hn::MulAdd(w, g.x, li_sum.x);
+                li_sum.y = hn::MulAdd(w, g.y, li_sum.y);
+                li_sum.z = hn::MulAdd(w, g.z, li_sum.z);
+            }
             if (a.drho) div = hn::MulAdd(m, dot3(vij.x, vij.y, vij.z, g.x, g.y, g.z), div);
             if (laminar) {  // a += m 4 nu (x_ij . grad W_ij) / ((rho_i + rho_j)(r^2 + eps)) v_ij
                 const auto lam = hn::Div(hn::Mul(m, hn::Mul(nu4, hn::Mul(s, c.r2))),
@@ -111,11 +142,20 @@ void ForceRows(const ForcePairArgs& a, const Index* rows, std::size_t begin, std
                     const auto rb = hn::GatherIndex(d, a.rho_b, c.j);
                     coef = hn::Add(hn::Set(d, pi_s), hn::Div(hn::GatherIndex(d, a.p_b, c.j), hn::Mul(rb, rb)));
                 }
-                if (viscous_b)
-                    coef = hn::Add(coef, monaghan(dot3(vib.x, vib.y, vib.z, c.dx, c.dy, c.dz), c.r2, alpha_b_2hc,
-                                                  hn::Add(vrhoi, rho0), eps_h2));
+                const auto visc = viscous_b ? monaghan(dot3(vib.x, vib.y, vib.z, c.dx, c.dy, c.dz), c.r2,
+                                                       alpha_b_2hc, hn::Add(vrhoi, rho0), eps_h2)
+                                            : hn::Zero(d);
                 const auto psi = hn::Mul(rho0, hn::GatherIndex(d, a.volume_b, c.j));
-                const Broadcast3<D> g = subtract_along_gradient(c, s, hn::IfThenElseZero(c.in, hn::Mul(psi, coef)), acc);
+                Broadcast3<D> g;
+                if (!corrected) {
+                    g = subtract_along_gradient(c, s, hn::IfThenElseZero(c.in, hn::Mul(psi, hn::Add(coef, visc))), acc);
+                } else {  // psi P_ib L_i grad W_ib: into the sum L_i multiplies
+                    g = subtract_along_gradient(c, s, hn::IfThenElseZero(c.in, hn::Mul(psi, visc)), acc);
+                    const auto w = hn::IfThenElseZero(c.in, hn::Mul(psi, coef));
+                    li_sum.x = hn::MulAdd(w, g.x, li_sum.x);
+                    li_sum.y = hn::MulAdd(w, g.y, li_sum.y);
+                    li_sum.z = hn::MulAdd(w, g.z, li_sum.z);
+                }
                 if (a.drho) div = hn::MulAdd(psi, dot3(vib.x, vib.y, vib.z, g.x, g.y, g.z), div);
                 if (laminar_b) {  // no-slip walls: psi 4 nu xgrad / ((rho_i + rho0)(r^2 + eps)) v_ib
                     const auto lam = hn::Div(hn::Mul(psi, hn::Mul(nu4, hn::Mul(s, c.r2))),
@@ -127,7 +167,65 @@ void ForceRows(const ForcePairArgs& a, const Index* rows, std::size_t begin, std
             }
         }
         store_sum3(d, acc, a.gravity, a.acc + 3 * std::size_t(i));
+        if (corrected) {  // a_i -= L_i (sum of the pressure terms' P grad W)
+            Real sum[3];
+            store_sum3(d, li_sum, nullptr, sum);
+            const Real* Li = a.L + 9 * std::size_t(i);
+            Real* out = a.acc + 3 * std::size_t(i);
+            for (int r = 0; r < 3; ++r) out[r] -= Li[r] * sum[0] + Li[3 + r] * sum[1] + Li[6 + r] * sum[2];
+        }
         if (a.drho) a.drho[i] = hn::GetLane(hn::SumOfLanes(d, div));
+    }
+}
+
+// Bonet & Lok 1999: M_i = -sum_j V_j s_ij x_ij x_ij^T (grad W_ij = s_ij x_ij), V_j = m / rho_j
+// for fluid neighbours and V_b for boundary ones; six lane sums, mirrored into the Mat3.
+void MomentRows(const MomentPairArgs& a, const Index* rows, std::size_t begin, std::size_t end) {
+    hn::ScalableTag<Real> d;
+    using D = decltype(d);
+    using V = hn::Vec<D>;
+    const KernelV<D> k(d, *a.kernel);
+    const auto m = hn::Set(d, a.mass);
+    const bool sparse = rows_are_sparse(rows, begin, end);
+    for (std::size_t q = begin; q < end; ++q) {
+        const Index i = rows ? rows[q] : Index(q);
+        prefetch_ahead(*a.fluid, a.x, rows, sparse, q, end);
+        const Broadcast3<D> xi = broadcast3(d, a.x + 3 * std::size_t(i));
+        V xx = hn::Zero(d), xy = xx, xz = xx, yy = xx, yz = xx, zz = xx;
+        // M -= w x_ij x_ij^T for one chunk, w = V_j s_ij (zero on masked lanes).
+        const auto subtract = [&](const PairChunk<D>& c, V w) {
+            const V wx = hn::Mul(w, c.dx), wy = hn::Mul(w, c.dy), wz = hn::Mul(w, c.dz);
+            xx = hn::NegMulAdd(wx, c.dx, xx);
+            xy = hn::NegMulAdd(wx, c.dy, xy);
+            xz = hn::NegMulAdd(wx, c.dz, xz);
+            yy = hn::NegMulAdd(wy, c.dy, yy);
+            yz = hn::NegMulAdd(wy, c.dz, yz);
+            zz = hn::NegMulAdd(wz, c.dz, zz);
+        };
+        const Index* list = a.fluid->of(i).data();
+        const std::size_t count = a.fluid->size_of(i);
+        for (std::size_t k0 = 0; k0 < count; k0 += hn::Lanes(d)) {
+            const PairChunk<D> c = pair_chunk(d, a.x, xi, list, k0, count);
+            const V s = k.grad_factor(d, hn::Sqrt(c.r2));
+            subtract(c, hn::IfThenElseZero(c.in, hn::Mul(hn::Div(m, hn::GatherIndex(d, a.rho, c.j)), s)));
+        }
+        if (a.xb) {
+            const Index* blist = a.boundary->of(i).data();
+            const std::size_t bcount = a.boundary->size_of(i);
+            for (std::size_t k0 = 0; k0 < bcount; k0 += hn::Lanes(d)) {
+                const PairChunk<D> c = pair_chunk(d, a.xb, xi, blist, k0, bcount);
+                const V s = k.grad_factor(d, hn::Sqrt(c.r2));
+                subtract(c, hn::IfThenElseZero(c.in, hn::Mul(hn::GatherIndex(d, a.volume_b, c.j), s)));
+            }
+        }
+        const auto sum = [&](V v) { return hn::GetLane(hn::SumOfLanes(d, v)); };
+        Mat3& M = a.moment[i];
+        M(0, 0) = sum(xx);
+        M(1, 1) = sum(yy);
+        M(2, 2) = sum(zz);
+        M(0, 1) = M(1, 0) = sum(xy);
+        M(0, 2) = M(2, 0) = sum(xz);
+        M(1, 2) = M(2, 1) = sum(yz);
     }
 }
 
@@ -214,6 +312,7 @@ void NonpressureRows(const NonpressurePairArgs& a, std::size_t begin, std::size_
 }
 #else
 void ForceRows(const ForcePairArgs&, const Index*, std::size_t, std::size_t) {}
+void MomentRows(const MomentPairArgs&, const Index*, std::size_t, std::size_t) {}
 void PressureForceRows(const PressurePairArgs&, std::size_t, std::size_t) {}
 void NonpressureRows(const NonpressurePairArgs&, std::size_t, std::size_t) {}
 #endif
@@ -225,6 +324,7 @@ HWY_AFTER_NAMESPACE();
 #if HWY_ONCE
 namespace sph {
 HWY_EXPORT(ForceRows);
+HWY_EXPORT(MomentRows);
 HWY_EXPORT(PressureForceRows);
 HWY_EXPORT(NonpressureRows);
 void nonpressure_rows_simd(const NonpressurePairArgs& a, std::size_t begin, std::size_t end) {
@@ -232,6 +332,9 @@ void nonpressure_rows_simd(const NonpressurePairArgs& a, std::size_t begin, std:
 }
 void force_rows_simd(const ForcePairArgs& a, const Index* rows, std::size_t begin, std::size_t end) {
     HWY_DYNAMIC_DISPATCH(ForceRows)(a, rows, begin, end);
+}
+void moment_rows_simd(const MomentPairArgs& a, const Index* rows, std::size_t begin, std::size_t end) {
+    HWY_DYNAMIC_DISPATCH(MomentRows)(a, rows, begin, end);
 }
 void pressure_force_rows_simd(const PressurePairArgs& a, std::size_t begin, std::size_t end) {
     HWY_DYNAMIC_DISPATCH(PressureForceRows)(a, begin, end);

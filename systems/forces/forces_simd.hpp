@@ -3,7 +3,7 @@
 /// @brief The vectorised force loop (forces_simd.cpp): He et al. eq. 4 with Monaghan's
 /// artificial viscosity, the Akinci et al. 2012 boundary terms and He eq. 5's drho/dt, for a
 /// range of rows, with the formulas of ForcesSystem's scalar loop (the symmetric pressure
-/// gradient; the corrected form runs the scalar loop).
+/// gradient, or the corrected one of Bonet & Lok 1999 when `L` is given).
 #include <cstddef>
 
 #include "engine/core/grid.hpp"
@@ -31,10 +31,33 @@ struct ForcePairArgs {
     Real* drho = nullptr;  ///< written when not null: drho_i/dt (He eq. 5)
     Real nu4 = 0;          ///< 4 nu of the laminar term (forces_kernels.hpp laminar_coefficient); 0: none
     bool alpha_b_laminar = false;  ///< the laminar term also acts against the boundary (no-slip walls)
+    /// The gradient correction L_i, 9 per particle (Eigen's column-major Mat3), or nullptr for
+    /// the symmetric gradient: the pressure term's grad W_ij becomes (L_i + L_j)/2 grad W_ij and
+    /// grad W_ib becomes L_i grad W_ib (forces_system.cpp).
+    const Real* L = nullptr;
 };
 
 /// @brief a_i (and drho_i/dt) of rows[k] (or of row k when rows is null), k in [begin, end).
 void force_rows_simd(const ForcePairArgs& a, const Index* rows, std::size_t begin, std::size_t end);
+
+/// @brief The moment matrices of the gradient correction (Bonet & Lok 1999;
+/// gradient_correction_system.hpp): M_i = -sum_j V_j grad W_ij x_ij^T over fluid (V_j = m /
+/// rho_j) and boundary (V_b) neighbours, the formula of GradientCorrectionSystem's scalar loop.
+/// grad W_ij = s x_ij, so M_i = -sum_j V_j s x_ij x_ij^T is symmetric: six sums.
+struct MomentPairArgs {
+    const Real* x = nullptr;  ///< fluid positions, xyz per particle
+    const Real* rho = nullptr;
+    const NeighbourLists* fluid = nullptr;
+    const Real* xb = nullptr;  ///< boundary positions (nullptr: no boundary term)
+    const Real* volume_b = nullptr;
+    const NeighbourLists* boundary = nullptr;
+    const CubicSpline* kernel = nullptr;
+    Real mass = 0;
+    Mat3* moment = nullptr;  ///< written: M_i per particle
+};
+
+/// @brief M_i of rows[k] (or of row k when rows is null), k in [begin, end).
+void moment_rows_simd(const MomentPairArgs& a, const Index* rows, std::size_t begin, std::size_t end);
 
 /// @brief PCISPH's pressure acceleration (Ihmsen et al. 2010 eq. 6 with the boundary's
 /// density and pressure, eq. 9-13), the formulas of PcisphPressureForceSystem's scalar loop.

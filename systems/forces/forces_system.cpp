@@ -143,9 +143,9 @@ void ForcesSystem::run(Context& ctx) {
         acc[i] = a + g;
         if constexpr (Drho) drho[i] = div;
     };
-    // The vectorised loop (simulation.simd) for the symmetric gradient; the scalar lambda
-    // above is the reference it is tested against, and runs the corrected form.
-    const bool simd = ph.simd && !m_corrected;
+    // The vectorised loop (simulation.simd); the scalar lambda above is the reference it is
+    // tested against.
+    const bool simd = ph.simd;
     ForcePairArgs vec;
     if (simd) {
         vec.x = x.empty() ? nullptr : x.data()->data();
@@ -173,6 +173,7 @@ void ForcesSystem::run(Context& ctx) {
         vec.drho = drho.empty() ? nullptr : drho.data();
         vec.nu4 = nu4;
         vec.alpha_b_laminar = alpha_b > 0;
+        vec.L = m_corrected && !L.empty() ? L.data()->data() : nullptr;
     }
     if (!m_individual) {
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 256), [&](const auto& r) {

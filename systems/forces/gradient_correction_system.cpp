@@ -13,6 +13,7 @@
 #include "engine/data/components.hpp"
 #include "engine/data/world.hpp"
 #include "engine/graph/context.hpp"
+#include "systems/forces/forces_simd.hpp"
 
 namespace sph {
 
@@ -66,15 +67,34 @@ void GradientCorrectionSystem::run(Context& ctx) {
             }
         L[i] = inverse_moment(moment);
     };
-    if (!m_individual) {
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 256), [&](const auto& r) {
-            for (std::size_t i = r.begin(); i < r.end(); ++i) correct(Index(i));
-        });
-        return;
+    // The vectorised sums (simulation.simd) write M_i into L_i, inverted in place; the scalar
+    // lambda above is the reference they are tested against.
+    MomentPairArgs vec;
+    const bool simd = ctx.physics().simd && !x.empty();
+    if (simd) {
+        vec.x = x.data()->data();
+        vec.rho = rho.data();
+        vec.fluid = &fluid_nb;
+        if (has_boundary) {
+            vec.xb = xb.data()->data();
+            vec.volume_b = vb.data();
+            vec.boundary = boundary_nb;
+        }
+        vec.kernel = &kernel;
+        vec.mass = m;
+        vec.moment = L.data();
     }
-    const auto& active = ctx.read(res::active_set);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, active.size(), 256), [&](const auto& r) {
-        for (std::size_t k = r.begin(); k < r.end(); ++k) correct(active[k]);
+    const Index* rows = m_individual ? ctx.read(res::active_set).data() : nullptr;
+    const std::size_t count = m_individual ? ctx.read(res::active_set).size() : x.size();
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 256), [&](const auto& r) {
+        if (simd) moment_rows_simd(vec, rows, r.begin(), r.end());
+        for (std::size_t k = r.begin(); k < r.end(); ++k) {
+            const Index i = rows ? rows[k] : Index(k);
+            if (simd)
+                L[i] = inverse_moment(L[i]);
+            else
+                correct(i);
+        }
     });
 }
 

@@ -30,9 +30,10 @@ struct Harness {
     Recipe recipe;
     std::map<std::string, System*> by_name;
 
-    explicit Harness(SteppingMode mode, double nu = 0) {
+    explicit Harness(SteppingMode mode, double nu = 0, bool corrected = false) {
         Scene s = test::tank_scene(Vec3d(0.3, 0.16, 0.1), Vec3d(0.4, 0.3, 0.1));
         s.fluid.viscosity = 0.1;
+        if (corrected) s.fluid.pressure_gradient = PressureGradient::Corrected;
         s.fluid.kinematic_viscosity = nu;  // the laminar term (Morris et al. 1997), also against the walls
         s.simulation.stepping.mode = mode;
         // A paddle inside the fluid, moving through it at 0.5 m/s.
@@ -66,8 +67,8 @@ std::vector<T> copy(std::span<const T> s) {
     return {s.begin(), s.end()};
 }
 
-void compare_paths(SteppingMode mode, double nu = 0) {
-    Harness H(mode, nu);
+void compare_paths(SteppingMode mode, double nu = 0, bool corrected = false) {
+    Harness H(mode, nu, corrected);
     World& w = H.w;
     const bool individual = mode == SteppingMode::Individual;
     ASSERT_TRUE(w.physics.simd);
@@ -106,7 +107,27 @@ void compare_paths(SteppingMode mode, double nu = 0) {
     EXPECT_LT(p_dev, 2.5e-6) << "largest pressure difference over 7 B (rho/rho0)^7";
     EXPECT_GT(p_max, 0.0);
 
-    // Forces (and drho/dt in individual stepping) on the scalar path's density, both paths.
+    // Forces (and drho/dt in individual stepping) on the scalar path's density, both paths
+    // (with the correction matrices L_i of that density, Bonet & Lok 1999).
+    if (corrected) {
+        w.physics.simd = true;
+        H.run("gradient_correction");
+        const auto L_simd = copy<Mat3>(w.fluid.store.get(comp::gradient_correction));
+        w.physics.simd = false;
+        H.run("gradient_correction");
+        const auto L = w.fluid.store.get(comp::gradient_correction);
+        double off_identity = 0, l_dev = 0;
+        for (std::size_t i = 0; i < n; ++i) {
+            off_identity = std::max(off_identity, double((L[i] - Mat3::Identity()).norm()));
+            l_dev = std::max(l_dev, double((L_simd[i] - L[i]).norm() / L[i].norm()));
+        }
+        ASSERT_GT(off_identity, 0.1) << "the jittered block's L_i should differ from the identity";
+        std::printf("gradient correction: largest relative difference of L_i %.3g\n", l_dev);
+        // M_i sums ~70 float terms in another order and mirrors its symmetric half; L_i = M_i^-1
+        // with eigenvalues clamped at 0.5 amplifies that by at most the condition number (<= 4
+        // once clamped): a few ulp times 4.
+        EXPECT_LT(l_dev, 5e-6) << "largest relative difference of L_i";
+    }
     w.physics.simd = true;
     H.run("forces");
     const auto acc_simd = copy<Vec3>(w.fluid.store.get(comp::acceleration));
@@ -152,6 +173,13 @@ TEST(VectorisedPaths, IndividualSteppingMatchesScalarWithMovingBody) { compare_p
 // ~ nu |v| / h^2 ~ 3e4 m/s^2, is as large as the jittered block's pressure term, so a wrong
 // coefficient or sign in either path shows in the same bound.
 TEST(VectorisedPaths, LaminarViscosityMatchesScalar) { compare_paths(SteppingMode::Global, 50.0); }
+// The corrected pressure gradient (Bonet & Lok 1999): the L_j half gathered per pair and the
+// L_i half applied once per row, against the scalar loop's (L_i + L_j)/2 grad W_ij per pair;
+// individual stepping also checks drho/dt, which keeps the uncorrected gradient (He eq. 5).
+TEST(VectorisedPaths, CorrectedGradientMatchesScalar) {
+    compare_paths(SteppingMode::Global, 0, true);
+    compare_paths(SteppingMode::Individual, 0, true);
+}
 
 // PCISPH's pair loops (Ihmsen et al. 2010 eq. 13 predicted density, eq. 6 pressure acceleration
 // with the boundary's density and pressure) on a flowing column 40 steps in, on the same inputs.
