@@ -148,7 +148,7 @@ TEST(StandingWave, PeriodAndDecayAgainstLinearTheory) {
     EXPECT_LT(w.decay, 0.5 * mirrored.decay);
 }
 
-// The same wave at r = 5 mm (50 particles deep, 50,000 particles; about 20 minutes on 2 cores,
+// The same wave at r = 5 mm (50 particles deep, 50,000 particles; about 7 minutes on 2 cores,
 // so disabled in CI: run with --gtest_also_run_disabled_tests --gtest_filter=StandingWave.*). It
 // asserts the targets (period 2 %, decay 20 %) at this resolution; the measured figures
 // are in docs/results/validation.md.
