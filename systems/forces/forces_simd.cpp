@@ -47,6 +47,14 @@ HWY_INLINE void store_sum3(D d, const Broadcast3<D>& a, const Real* g, Real* out
     out[2] = hn::GetLane(hn::SumOfLanes(d, a.z)) + (g ? g[2] : Real(0));
 }
 
+/// sum += w g per component.
+template <class D>
+HWY_INLINE void add_times(hn::Vec<D> w, const Broadcast3<D>& g, Broadcast3<D>& sum) {
+    sum.x = hn::MulAdd(w, g.x, sum.x);
+    sum.y = hn::MulAdd(w, g.y, sum.y);
+    sum.z = hn::MulAdd(w, g.z, sum.z);
+}
+
 /// L_j g of the chunk's neighbours, L_j gathered from 9 Reals per particle (column-major:
 /// (L g)_r = sum_c L[3 c + r] g_c).
 template <class D>
@@ -116,17 +124,13 @@ void ForceRows(const ForcePairArgs& a, const Index* rows, std::size_t begin, std
                 acc.x = hn::NegMulAdd(w, lg.x, acc.x);
                 acc.y = hn::NegMulAdd(w, lg.y, acc.y);
                 acc.z = hn::NegMulAdd(w, lg.z, acc.z);
-                li_sum.x = hn::MulAdd(w, g.x, li_sum.x);
-                li_sum.y = hn::MulAdd(w, g.y, li_sum.y);
-                li_sum.z = hn::MulAdd(w, g.z, li_sum.z);
+                add_times(w, g, li_sum);
             }
             if (a.drho) div = hn::MulAdd(m, dot3(vij.x, vij.y, vij.z, g.x, g.y, g.z), div);
             if (laminar) {  // a += m 4 nu (x_ij . grad W_ij) / ((rho_i + rho_j)(r^2 + eps)) v_ij
                 const auto lam = hn::Div(hn::Mul(m, hn::Mul(nu4, hn::Mul(s, c.r2))),
                                          hn::Mul(hn::Add(vrhoi, rhoj), hn::Add(c.r2, eps_h2)));
-                acc.x = hn::MulAdd(lam, vij.x, acc.x);
-                acc.y = hn::MulAdd(lam, vij.y, acc.y);
-                acc.z = hn::MulAdd(lam, vij.z, acc.z);
+                add_times(lam, vij, acc);
             }
         }
         if (a.xb) {
@@ -152,17 +156,13 @@ void ForceRows(const ForcePairArgs& a, const Index* rows, std::size_t begin, std
                 } else {  // psi P_ib L_i grad W_ib: into the sum L_i multiplies
                     g = subtract_along_gradient(c, s, hn::IfThenElseZero(c.in, hn::Mul(psi, visc)), acc);
                     const auto w = hn::IfThenElseZero(c.in, hn::Mul(psi, coef));
-                    li_sum.x = hn::MulAdd(w, g.x, li_sum.x);
-                    li_sum.y = hn::MulAdd(w, g.y, li_sum.y);
-                    li_sum.z = hn::MulAdd(w, g.z, li_sum.z);
+                    add_times(w, g, li_sum);
                 }
                 if (a.drho) div = hn::MulAdd(psi, dot3(vib.x, vib.y, vib.z, g.x, g.y, g.z), div);
                 if (laminar_b) {  // no-slip walls: psi 4 nu xgrad / ((rho_i + rho0)(r^2 + eps)) v_ib
                     const auto lam = hn::Div(hn::Mul(psi, hn::Mul(nu4, hn::Mul(s, c.r2))),
                                              hn::Mul(hn::Add(vrhoi, rho0), hn::Add(c.r2, eps_h2)));
-                    acc.x = hn::MulAdd(lam, vib.x, acc.x);
-                    acc.y = hn::MulAdd(lam, vib.y, acc.y);
-                    acc.z = hn::MulAdd(lam, vib.z, acc.z);
+                    add_times(lam, vib, acc);
                 }
             }
         }
