@@ -15,7 +15,7 @@ import sys
 
 TIMING_KEYS = {"wall_time_s", "cpu_time_s", "fluid_particle_steps_per_s", "peak_memory_bytes",
                "particle_data_bytes", "bytes_per_fluid_particle", "peak_memory_per_fluid_particle",
-               "systems", "systems_total_s", "threads"}
+               "systems", "systems_total_s", "spatial_sort_s", "threads"}
 
 
 def stats_columns(path):

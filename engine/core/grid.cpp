@@ -6,9 +6,10 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
-#include <tbb/parallel_sort.h>
 
 #include <atomic>
+#include <bit>
+#include <utility>
 #include <cmath>
 #include <cstring>
 #include <sstream>
@@ -660,18 +661,37 @@ std::uint64_t spread_bits(std::uint64_t v) {  // 21 bits -> every third bit
 
 std::vector<Index> zorder_permutation(const UniformGrid& grid, std::span<const Vec3> positions) {
     const std::size_t n = positions.size();
-    std::vector<std::pair<std::uint64_t, Index>> keys(n);
+    auto morton = [](const Eigen::Vector3i& c) {
+        return spread_bits(std::uint64_t(c[0])) | spread_bits(std::uint64_t(c[1])) << 1 |
+               spread_bits(std::uint64_t(c[2])) << 2;
+    };
+    std::vector<std::uint64_t> key(n);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const auto& r) {
-        for (std::size_t i = r.begin(); i < r.end(); ++i) {
-            const Eigen::Vector3i c = grid.cell_coords(positions[i]);
-            const std::uint64_t m = spread_bits(std::uint64_t(c[0])) | spread_bits(std::uint64_t(c[1])) << 1 |
-                                    spread_bits(std::uint64_t(c[2])) << 2;
-            keys[i] = {m, Index(i)};
-        }
+        for (std::size_t i = r.begin(); i < r.end(); ++i) key[i] = morton(grid.cell_coords(positions[i]));
     });
-    tbb::parallel_sort(keys.begin(), keys.end());
-    std::vector<Index> perm(n);
-    for (std::size_t i = 0; i < n; ++i) perm[i] = keys[i].second;
+    // A stable LSD radix sort over the bits the grid's codes use (18 for a 64^3 grid: two passes
+    // of 11-bit digits), so ties keep index order: the order of sorting (key, index) pairs, in
+    // O(n) per pass.
+    const int bits = std::bit_width(morton(grid.dims() - Eigen::Vector3i::Ones()));
+    constexpr int kDigit = 11;
+    constexpr std::size_t kBuckets = std::size_t(1) << kDigit;
+    std::vector<Index> perm(n), next(n);
+    std::vector<std::uint64_t> next_key(n);
+    for (std::size_t i = 0; i < n; ++i) perm[i] = Index(i);
+    std::vector<std::size_t> start(kBuckets);
+    for (int shift = 0; shift < bits; shift += kDigit) {  // keys move with their indices
+        std::fill(start.begin(), start.end(), 0);
+        for (std::size_t k = 0; k < n; ++k) ++start[(key[k] >> shift) & (kBuckets - 1)];
+        std::size_t sum = 0;
+        for (std::size_t& s : start) sum += std::exchange(s, sum);
+        for (std::size_t k = 0; k < n; ++k) {
+            const std::size_t to = start[(key[k] >> shift) & (kBuckets - 1)]++;
+            next[to] = perm[k];
+            next_key[to] = key[k];
+        }
+        perm.swap(next);
+        key.swap(next_key);
+    }
     return perm;
 }
 

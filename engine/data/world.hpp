@@ -60,6 +60,9 @@ struct Clock {
     /// No step may end past this time (the run's end): the step-size system clips the last step.
     double t_stop = std::numeric_limits<double>::infinity();
     std::uint64_t rollbacks = 0;  ///< steps discarded by a rollback so far (kept through rollbacks)
+    /// Fluid rows evaluated since the last spatial sort (binned stepping sorts by it:
+    /// Simulation::sort_due).
+    std::uint64_t rows_since_sort = 0;
 };
 
 /// @brief The step being taken (res::dt): written by the step-size system(s) of each recipe

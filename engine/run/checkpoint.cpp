@@ -152,7 +152,8 @@ nlohmann::json step_section(const World& w) {
         return b;
     };
     nlohmann::json j;
-    j["clock"] = {{"t_ticks", w.clock.t_ticks}, {"step", w.clock.step}, {"rollbacks", w.clock.rollbacks}};
+    j["clock"] = {{"t_ticks", w.clock.t_ticks}, {"step", w.clock.step}, {"rollbacks", w.clock.rollbacks},
+                  {"rows_since_sort", w.clock.rows_since_sort}};
     j["step_size"] = {{"dt_ticks", w.step_size.dt_ticks}, {"dt", bits(w.step_size.dt)},
                       {"dt_stable", bits(w.step_size.dt_stable)}};
     j["stats"] = {{"rho_err_avg", bits(w.stats.rho_err_avg)}, {"rho_err_max", bits(w.stats.rho_err_max)},
@@ -177,6 +178,7 @@ void restore_step(World& w, const std::string& text, const std::filesystem::path
         w.clock.t = to_seconds(w.clock.t_ticks);
         w.clock.step = c.at("step").get<std::int64_t>();
         w.clock.rollbacks = c.at("rollbacks").get<std::uint64_t>();
+        w.clock.rows_since_sort = c.at("rows_since_sort").get<std::uint64_t>();
         w.clock.t_stop = std::numeric_limits<double>::infinity();
         const auto& d = j.at("step_size");
         w.step_size.dt_ticks = d.at("dt_ticks").get<Tick>();

@@ -149,7 +149,7 @@ std::string Recorder::header(const Simulation& sim) const {
     for (const auto& name : extra_counters(sim.world())) h << ',' << name;
     h << ",wall_s";
     for (const auto& s : sim.graph().systems()) h << ",ms_" << s->name();
-    h << '\n';
+    h << ",ms_spatial_sort\n";  // the engine's re-sort before the systems (Simulation::last_sort_seconds)
     return h.str();
 }
 
@@ -334,7 +334,8 @@ void Recorder::after_step(const Simulation& sim) {
     const auto& g = sim.graph();
     row << std::setprecision(4);
     for (std::size_t i = 0; i < g.systems().size(); ++i) row << ',' << g.last_seconds(i) * 1e3;
-    row << '\n';
+    row << ',' << sim.last_sort_seconds() * 1e3 << '\n';
+    m_sort_seconds += sim.last_sort_seconds();
     m_pending += row.str();
     m_collisions += c("collisions");
     if (rec.rolled_back) return;  // a discarded step (rollback) counts in no statistic
@@ -472,6 +473,7 @@ nlohmann::json Recorder::finish(const Simulation& sim, double wall_seconds, int 
                            {"share", total > 0 ? g.total_seconds(i) / total : 0.0}});
     j["systems"] = systems;
     j["systems_total_s"] = total;
+    j["spatial_sort_s"] = m_sort_seconds;  // outside the systems: the re-sorts of the particle columns
     if (!m_interrupted.empty()) j["interrupted"] = {{"by", m_interrupted}, {"t", sim.time()}, {"step", sim.steps()}};
     if (!m_output_failed.empty())
         j["output_failed"] = {{"reason", m_output_failed}, {"t", sim.time()}, {"step", sim.steps()}};

@@ -91,6 +91,7 @@ private:
     bool m_boundary_written = false;    ///< frames/boundary.* (the static boundary) exists
     std::uint64_t m_collisions = 0;
     double m_active_fraction_sum = 0;  ///< sum over steps of active / fluid particles
+    double m_sort_seconds = 0;         ///< wall seconds of the re-sorts (Simulation::last_sort_seconds) this process
     double m_dt_min = 0, m_dt_max = 0, m_rho_err_max = 0;
     std::uint64_t m_steps = 0;          ///< kept steps (a rolled-back step is not counted)
     double m_rho_err_avg_max = 0;

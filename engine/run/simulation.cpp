@@ -1,5 +1,7 @@
 #include "engine/run/simulation.hpp"
 
+#include <chrono>
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_reduce.h>
 
@@ -170,10 +172,25 @@ void Simulation::spatial_sort() {
     synchronise();  // the order follows every row's position at the clock's time
     auto perm = zorder_permutation(m_world.fluid_grid, m_world.fluid.store.get(comp::position));
     m_world.fluid.store.permute(perm);
-    // Lists that are kept across steps (individual stepping reuses inactive particles' lists)
-    // follow the permutation; fluid->fluid entries are renumbered as well.
-    m_world.fluid_neighbours.permute(perm, true);
-    m_world.boundary_neighbours.permute(perm, false);
+    // Lists that are kept across steps (the slab layout: individual stepping reuses inactive
+    // particles' lists) follow the permutation, fluid->fluid entries renumbered as well. The
+    // compact layout is rebuilt by every step before any system reads it (a binned subset
+    // build empties the blocks of the rows it last queried, which the old numbering names), so
+    // it is left as it is: renumbering it cost more than the rest of the sort.
+    if (!m_world.fluid_neighbours.compact()) m_world.fluid_neighbours.permute(perm, true);
+    if (!m_world.boundary_neighbours.compact()) m_world.boundary_neighbours.permute(perm, false);
+}
+
+bool Simulation::sort_due() const {
+    const SimulationParams& sim = m_world.scene.simulation;
+    if (sim.sort_interval <= 0) return false;
+    // A binned step evaluates the rows that are due, often a few in a thousand, and the order
+    // decays with the motion of the rows evaluated: sorting every sort_interval steps would
+    // re-sort (and rebuild the grid for) a fluid that has barely moved.
+    if (sim.stepping.mode == SteppingMode::Binned)
+        return m_world.clock.step == 0 ||
+               m_world.clock.rows_since_sort >= std::uint64_t(sim.sort_interval) * m_world.fluid.size();
+    return m_world.clock.step % sim.sort_interval == 0;
 }
 
 void Simulation::step() {
@@ -182,8 +199,14 @@ void Simulation::step() {
 }
 
 void Simulation::step_once() {
-    const int interval = m_world.scene.simulation.sort_interval;
-    if (interval > 0 && m_world.clock.step % interval == 0) spatial_sort();
+    m_sort_seconds = 0;
+    m_sorted = sort_due();
+    if (m_sorted) {
+        const auto t0 = std::chrono::steady_clock::now();
+        spatial_sort();
+        m_world.clock.rows_since_sort = 0;
+        m_sort_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    }
     if (m_ring) m_ring->save(m_world);
     m_non_finite = m_outside = Fault{};
     m_graph->run();
@@ -194,6 +217,7 @@ void Simulation::step_once() {
         return;
     }
     check_step();
+    m_world.clock.rows_since_sort += m_world.counter_value(counter::active.name);
     m_world.clock.t_ticks += m_world.step_size.dt_ticks;
     m_world.clock.t = to_seconds(m_world.clock.t_ticks);
     ++m_world.clock.step;

@@ -68,6 +68,11 @@ public:
     std::int64_t steps() const { return m_world.clock.step; }
     /// @brief The step last taken.
     const StepRecord& last() const { return m_last; }
+    /// @brief Seconds the last step spent re-sorting the particle columns before its systems ran
+    /// (0 when it did not sort): engine work outside the graph's nodes.
+    double last_sort_seconds() const { return m_sort_seconds; }
+    /// @brief Whether the last step began with a re-sort of the particle columns.
+    bool last_step_sorted() const { return m_sorted; }
     const SystemGraph& graph() const { return *m_graph; }
     /// @brief Bytes held by particle columns, grids and neighbour lists.
     std::size_t particle_bytes() const;
@@ -79,7 +84,9 @@ private:
     std::atomic<bool> m_stop{false};
     bool m_wave_given = false;
     bool m_sync_observers = true;
-    bool m_behind = false;  ///< some fluid row is behind the clock (World::synchronise pending)
+    bool m_behind = false;
+    double m_sort_seconds = 0;  ///< last_sort_seconds()
+    bool m_sorted = false;      ///< last_step_sorted()  ///< some fluid row is behind the clock (World::synchronise pending)
     /// One step without the observers' synchronisation.
     void step_once();
     /// run_until without the standing wave's split.
@@ -88,6 +95,8 @@ private:
     void give_wave_if_due();
     void check_step();
     void spatial_sort();
+    /// Whether the particle columns are re-sorted before this step (SimulationParams::sort_interval).
+    bool sort_due() const;
     /// Scans the fluid columns system i writes, on the rows it declares (Access::rows), for
     /// non-finite values (NaN, inf) and positions outside the domain, and keeps the earliest
     /// system in recipe order that produced each this step.
