@@ -132,8 +132,8 @@ struct SimulationParams {
     double frame_rate = 30.0;    ///< frames per simulated second; 0 writes no frames.
     double scale = 1.0;          ///< particle-count multiplier: radius /= cbrt(scale).
     Vec3d gravity{0.0, -9.81, 0.0};  ///< m/s^2
-    /// Steps between z-order re-sorts of the particle columns; in binned stepping, whose steps
-    /// evaluate few rows each, the rows that many whole-fluid steps evaluate
+    /// Steps between z-order re-sorts of the particle columns; in binned and individual
+    /// stepping, whose steps evaluate part of the rows, the rows that many whole-fluid steps evaluate
     /// (sort_interval x fluid rows, counted by Clock::rows_since_sort).
     int sort_interval = 16;
     /// Vectorised pair loops (neighbour filter, density, forces) at the widest instruction set

@@ -60,7 +60,7 @@ struct Clock {
     /// No step may end past this time (the run's end): the step-size system clips the last step.
     double t_stop = std::numeric_limits<double>::infinity();
     std::uint64_t rollbacks = 0;  ///< steps discarded by a rollback so far (kept through rollbacks)
-    /// Fluid rows evaluated since the last spatial sort (binned stepping sorts by it:
+    /// Fluid rows evaluated since the last spatial sort (binned and individual stepping sort by it:
     /// Simulation::sort_due).
     std::uint64_t rows_since_sort = 0;
 };

@@ -184,10 +184,10 @@ void Simulation::spatial_sort() {
 bool Simulation::sort_due() const {
     const SimulationParams& sim = m_world.scene.simulation;
     if (sim.sort_interval <= 0) return false;
-    // A binned step evaluates the rows that are due, often a few in a thousand, and the order
-    // decays with the motion of the rows evaluated: sorting every sort_interval steps would
-    // re-sort (and rebuild the grid for) a fluid that has barely moved.
-    if (sim.stepping.mode == SteppingMode::Binned)
+    // A per-particle step (binned, individual) evaluates the rows that are due, often a few in
+    // a thousand, and the order decays with the motion of the rows evaluated: sorting every
+    // sort_interval steps would re-sort (and rebuild the grid for) a fluid that has barely moved.
+    if (sim.stepping.mode == SteppingMode::Binned || sim.stepping.mode == SteppingMode::Individual)
         return m_world.clock.step == 0 ||
                m_world.clock.rows_since_sort >= std::uint64_t(sim.sort_interval) * m_world.fluid.size();
     return m_world.clock.step % sim.sort_interval == 0;
