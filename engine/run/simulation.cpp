@@ -41,6 +41,7 @@ constexpr std::size_t kCheckGrain = 8192, kCheckBlock = 256;
 bool finite(Real v) { return std::isfinite(v); }
 bool finite(double v) { return std::isfinite(v); }
 bool finite(const Vec3& v) { return std::isfinite(v[0]) & std::isfinite(v[1]) & std::isfinite(v[2]); }
+bool finite(const Mat3& m) { return finite(Vec3(m.col(0))) & finite(Vec3(m.col(1))) & finite(Vec3(m.col(2))); }
 
 /// The first row, by position in `rows` (ascending, so also the lowest index) or by index when
 /// `rows` is null, at which `bad(i)` holds; n (the column's length) when none does.
@@ -127,6 +128,9 @@ void Simulation::trace_non_finite(std::size_t system) {
             }
         } else if (t == typeid(Vec3)) {
             const auto v = store.get(Component<Vec3>{col});
+            bad = first_row(n, rows, [&](std::size_t i) { return !finite(v[i]); });
+        } else if (t == typeid(Mat3)) {  // the kernel-gradient correction L_i
+            const auto v = store.get(Component<Mat3>{col});
             bad = first_row(n, rows, [&](std::size_t i) { return !finite(v[i]); });
         } else if (t == typeid(Real)) {
             const auto v = store.get(Component<Real>{col});

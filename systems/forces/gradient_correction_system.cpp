@@ -33,11 +33,13 @@ Mat3 inverse_moment(const Mat3& moment, Real min_eigenvalue) {
 }
 
 Access GradientCorrectionSystem::access() const {
-    return Access()
-        .read(fluid(comp::position), fluid(comp::density), res::fluid_neighbours)
-        .write(fluid(comp::gradient_correction))
-        .read_if(m_with_boundary, res::boundary_neighbours, boundary(comp::position), boundary(comp::volume))
-        .read_if(m_individual, res::active_set);
+    Access a = Access()
+                   .read(fluid(comp::position), fluid(comp::density), res::fluid_neighbours)
+                   .write(fluid(comp::gradient_correction))
+                   .read_if(m_with_boundary, res::boundary_neighbours, boundary(comp::position), boundary(comp::volume))
+                   .read_if(m_individual, res::active_set);
+    if (m_individual) a.rows(res::active_set);  // L_i of the active rows only, as the forces read them
+    return a;
 }
 
 void GradientCorrectionSystem::register_components(World& w) { w.fluid.store.add(comp::gradient_correction); }

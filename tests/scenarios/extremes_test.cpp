@@ -15,6 +15,7 @@
 
 #include "engine/data/components.hpp"
 #include "engine/core/errors.hpp"
+#include "engine/graph/context.hpp"
 #include "systems/debug/nan_injection_system.hpp"
 #include "systems/methods/recipes.hpp"
 #include "test_scenes.hpp"
@@ -317,6 +318,58 @@ TEST(Extremes, InjectedNaNIsTracedToParticleStepAndSystem) {
             EXPECT_NE(std::string(e.what()).find("particle 17 became non-finite at step 5"), std::string::npos)
                 << e.what();
             EXPECT_NE(std::string(e.what()).find("acceleration is NaN"), std::string::npos) << e.what();
+        }
+    }
+}
+
+namespace {
+
+/// Puts a NaN into one particle's kernel-gradient correction L_i at one step, as a broken
+/// moment matrix would (the corrected pressure gradient's own column, a Mat3).
+class BreakCorrection final : public System {
+public:
+    BreakCorrection(std::int64_t step, std::uint32_t id) : m_step(step), m_id(id) {}
+    std::string name() const override { return "break_correction"; }
+    Access access() const override { return Access().read(fluid(comp::id)).write(fluid(comp::gradient_correction)); }
+    void run(Context& ctx) override {
+        if (ctx.clock().step != m_step) return;
+        const auto id = ctx.read(fluid(comp::id));
+        auto L = ctx.write(fluid(comp::gradient_correction));
+        for (std::size_t i = 0; i < id.size(); ++i)
+            if (id[i] == m_id) L[i](1, 2) = std::numeric_limits<Real>::quiet_NaN();
+    }
+
+private:
+    std::int64_t m_step;
+    std::uint32_t m_id;
+};
+
+}  // namespace
+
+// The same for the corrected pressure gradient's L_i (a 3 x 3 column): a NaN put there after
+// `gradient_correction` is named with the system that wrote it and its column, not with
+// `forces`, which carries it into the acceleration (the trace read no Mat3 column before).
+TEST(Extremes, NaNInTheGradientCorrectionIsTracedToItsSystem) {
+    for (const SteppingMode mode : k_modes) {
+        Scene s = test::tank_scene(Vec3d(0.08, 0.08, 0.08), Vec3d(0.2, 0.2, 0.2));
+        s.simulation.stepping.mode = mode;
+        s.simulation.stepping.dt = 2e-4;
+        s.fluid.pressure_gradient = PressureGradient::Corrected;
+        Recipe recipe = make_recipe(s);
+        auto at = recipe.step.end();
+        for (auto it = recipe.step.begin(); it != recipe.step.end(); ++it)
+            if ((*it)->name() == "gradient_correction") at = it + 1;
+        ASSERT_NE(at, recipe.step.end()) << to_string(mode) << ": no gradient_correction system";
+        recipe.step.insert(at, std::make_unique<BreakCorrection>(4, 11));
+        Simulation sim(s, std::move(recipe));
+        try {
+            sim.run_until(0.1);
+            FAIL() << to_string(mode) << ": the run did not stop";
+        } catch (const SimulationError& e) {
+            EXPECT_EQ(e.particle(), 11) << e.what();
+            EXPECT_EQ(e.step(), 4) << e.what();
+            EXPECT_EQ(e.system(), "break_correction") << e.what();
+            EXPECT_NE(std::string(e.what()).find("gradient_correction is NaN"), std::string::npos) << e.what();
         }
     }
 }
