@@ -72,10 +72,13 @@ public:
     /// the last candidate in a CandidateCache, so a vectorised loop may load a whole vector.
     static constexpr std::size_t kPadding = 16;
 
+    /// The cell of x along each axis, floor((x - origin) / cell_size) clamped to the grid. The
+    /// conversion truncates instead of calling floor: the two differ only below 0, where the
+    /// clamp gives 0 either way (floor is a call, or a long sequence, without SSE4.1).
     [[gnu::always_inline]] Eigen::Vector3i cell_coords(const Vec3& x) const {
         Eigen::Vector3i c;
         for (int a = 0; a < 3; ++a) {
-            const int v = static_cast<int>(std::floor((x[a] - m_origin[a]) * m_inv_cell));
+            const int v = static_cast<int>((x[a] - m_origin[a]) * m_inv_cell);
             c[a] = std::clamp(v, 0, m_dims[a] - 1);
         }
         return c;
