@@ -26,6 +26,14 @@ namespace {
 
 const SteppingMode k_modes[] = {SteppingMode::Constant, SteppingMode::Global, SteppingMode::Individual};
 
+/// 64 particles (a 0.08 m cube) in a 0.2 m tank, in `mode`, dt 2e-4 s where the mode takes one.
+Scene small_tank(SteppingMode mode) {
+    Scene s = test::tank_scene(Vec3d(0.08, 0.08, 0.08), Vec3d(0.2, 0.2, 0.2));
+    s.simulation.stepping.mode = mode;
+    s.simulation.stepping.dt = 2e-4;
+    return s;
+}
+
 bool all_fluid_finite(const World& w) {
     const auto& st = w.fluid.store;
     for (const auto& name : st.names()) {
@@ -60,9 +68,7 @@ std::size_t resident_bytes() {
 // forces and stay together; every column stays finite in every mode.
 TEST(Extremes, CoincidentParticlesGiveNoNaN) {
     for (const SteppingMode mode : k_modes) {
-        Scene s = test::tank_scene(Vec3d(0.08, 0.08, 0.08), Vec3d(0.2, 0.2, 0.2));
-        s.simulation.stepping.mode = mode;
-        s.simulation.stepping.dt = 2e-4;
+        Scene s = small_tank(mode);
         auto sim = make_simulation(s);
         auto x = sim->world().fluid.store.get(comp::position);
         ASSERT_EQ(x.size(), 64u);
@@ -302,9 +308,7 @@ TEST(Extremes, CollapsingStepStopsWithDiagnosis) {
 // system, not `forces` (which ran before) nor `integrate` (which carried it into x and v).
 TEST(Extremes, InjectedNaNIsTracedToParticleStepAndSystem) {
     for (const SteppingMode mode : k_modes) {
-        Scene s = test::tank_scene(Vec3d(0.08, 0.08, 0.08), Vec3d(0.2, 0.2, 0.2));
-        s.simulation.stepping.mode = mode;
-        s.simulation.stepping.dt = 2e-4;
+        Scene s = small_tank(mode);
         Recipe recipe = make_recipe(s);
         add_nan_injection(recipe, 5, 17);
         Simulation sim(s, std::move(recipe));
@@ -351,9 +355,7 @@ private:
 // `forces`, which carries it into the acceleration (the trace read no Mat3 column before).
 TEST(Extremes, NaNInTheGradientCorrectionIsTracedToItsSystem) {
     for (const SteppingMode mode : k_modes) {
-        Scene s = test::tank_scene(Vec3d(0.08, 0.08, 0.08), Vec3d(0.2, 0.2, 0.2));
-        s.simulation.stepping.mode = mode;
-        s.simulation.stepping.dt = 2e-4;
+        Scene s = small_tank(mode);
         s.fluid.pressure_gradient = PressureGradient::Corrected;
         Recipe recipe = make_recipe(s);
         auto at = recipe.step.end();
