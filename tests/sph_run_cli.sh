@@ -29,6 +29,15 @@ check "missing file exits 2 (got $rc)" '[ $rc -eq 2 ] && grep -q "cannot open sc
 check "short run exits 0 (got $rc)" '[ $rc -eq 0 ]'
 check "summary.json reaches t = 0.05" 'python3 -c "import json,sys; s=json.load(open(\"$tmp/good/summary.json\")); sys.exit(0 if abs(s[\"simulated_time_s\"]-0.05)<1e-9 and s[\"steps\"]>10 and s[\"fluid_particles\"]==8000 else 1)"'
 check "stats.csv has one row per step" 'python3 -c "import json,sys; s=json.load(open(\"$tmp/good/summary.json\")); n=len(open(\"$tmp/good/stats.csv\").read().splitlines())-1; sys.exit(0 if n==s[\"steps\"] else 1)"'
+# The engine's re-sort (every 16 steps in global) is the last column, positive exactly on those
+# steps; its total is summary.json's spatial_sort_s (the column holds 4 significant digits).
+check "ms_spatial_sort: the sorting steps, summed in spatial_sort_s" 'python3 -c "
+import csv, json, sys
+rows = list(csv.DictReader(open(\"$tmp/good/stats.csv\")))
+s = json.load(open(\"$tmp/good/summary.json\"))
+ok = list(rows[0])[-1] == \"ms_spatial_sort\" and all((float(r[\"ms_spatial_sort\"]) > 0) == (int(r[\"step\"]) % 16 == 0) for r in rows)
+total = sum(float(r[\"ms_spatial_sort\"]) for r in rows) / 1e3
+sys.exit(0 if ok and abs(total - s[\"spatial_sort_s\"]) <= 1e-3 * s[\"spatial_sort_s\"] + 1e-9 else 1)"'
 check "frames at 30 fps: t = 0 and one more" '[ -f "$tmp/good/frames/frame_00000.vtu" ] && [ -f "$tmp/good/frames/frame_00001.vtu" ]'
 check "graph has the WCSPH nodes" 'grep -q "forces" "$tmp/g.dot" && grep -q -- "->" "$tmp/g.dot"'
 check "no temporary files left" '[ -z "$(find "$tmp/good" -name "*.tmp*")" ]'
