@@ -9,13 +9,13 @@
 
 #include <atomic>
 #include <bit>
-#include <utility>
 #include <cmath>
 #include <cstring>
 #include <sstream>
 #include <string>
 #include <limits>
 #include <stdexcept>
+#include <utility>
 
 namespace sph {
 
