@@ -21,6 +21,7 @@
 #include <tbb/global_control.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <filesystem>
 #include <map>
 #include <memory>
@@ -46,8 +47,9 @@ Scene scene_for(const std::string& scene, const std::string& mode) {
     return load_scene(SPH_SOURCE_DIR "/scenes/" + scene + ".json", o);
 }
 
-/// A simulation of `scene` in `mode` at t = 0.5 s: from the fixture file if it exists, else
-/// run there (at the machine's thread count) and saved.
+/// A simulation of `scene` in `mode` at t = 0.5 s: from the fixture file if it exists and this
+/// engine can restore it, else run there (at the machine's thread count) and saved. A fixture
+/// an older engine wrote (another checkpoint format) is computed again, not a crash.
 std::unique_ptr<Simulation> snapshot(const std::string& scene, const std::string& mode, bool simd) {
     Scene s = scene_for(scene, mode);
     s.simulation.simd = simd;
@@ -55,8 +57,13 @@ std::unique_ptr<Simulation> snapshot(const std::string& scene, const std::string
     const std::filesystem::path dir = SPH_BENCH_FIXTURE_DIR;
     const std::filesystem::path file = dir / (scene + "_" + mode + ".ckpt");
     if (std::filesystem::exists(file)) {
-        restore_checkpoint(*sim, read_checkpoint(file));
-        return sim;
+        try {
+            restore_checkpoint(*sim, read_checkpoint(file));
+            return sim;
+        } catch (const CheckpointError& e) {
+            std::fprintf(stderr, "%s: not this engine's fixture (%s); computing it again\n", file.c_str(), e.what());
+            sim = make_simulation(s);
+        }
     }
     std::filesystem::create_directories(dir);
     sim->run_until(kSnapshotTime);
