@@ -9,6 +9,7 @@
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
+#include <limits>
 
 #include <vector>
 
@@ -17,13 +18,14 @@
 #include "engine/data/world.hpp"
 #include "engine/graph/context.hpp"
 #include "systems/integrate/drift.hpp"
+#include "systems/timestep/binned_state.hpp"
 
 namespace sph {
 
 Access BoundaryCollisionSystem::access() const {
     Access a = Access()
         .write(fluid(comp::position), fluid(comp::velocity), fluid(comp::wake), counter::collisions)
-        .write_if(m_active_rows, res::collided)
+        .write_if(m_active_rows, res::collided, res::drift_bound)
         .read_if(m_active_rows, res::active_set)
         .read_if(m_moving || m_active_rows, res::dt)  // the body's position at the step's end
         // binned: the end state of an active row from its base (it is not advanced before)
@@ -124,6 +126,10 @@ bool collide(const BoundaryDesc& b, Vec3& x, Vec3& v) {
 
 }  // namespace
 
+void BoundaryCollisionSystem::register_components(World& w) {
+    if (m_active_rows) w.resources.add<DriftBound>(res::drift_bound.name, Lifetime::Scratch);
+}
+
 void BoundaryCollisionSystem::run(Context& ctx) {
     auto x = ctx.write(fluid(comp::position));
     auto v = ctx.write(fluid(comp::velocity));
@@ -148,6 +154,7 @@ void BoundaryCollisionSystem::run(Context& ctx) {
     const NeighbourLists* lists = m_count_droplets ? &ctx.read(res::fluid_neighbours) : nullptr;
     struct Count {
         std::uint64_t hits = 0, droplets = 0;
+        double shift = 0;  ///< binned: the longest jump the net gave a row
     };
     // Binned stepping: an active row holds its state at the step's start and its new base; its
     // state at the step's end is He Alg. 2 lines 19-21 from that base (written only if netted;
@@ -173,6 +180,7 @@ void BoundaryCollisionSystem::run(Context& ctx) {
                     vi = drifted_velocity(v0[i], acc[i], dt);
                     xi = drifted_position(x0[i], vi, dt);
                 }
+                const Vec3 x_end = xi;  // before the net
                 bool hit = false;
                 if (!any_moving) {
                     for (const auto& b : boundaries) hit |= collide(b, xi, vi);
@@ -188,6 +196,7 @@ void BoundaryCollisionSystem::run(Context& ctx) {
                     }
                 }
                 if (hit) {
+                    if (m_active_rows) count.shift = std::max(count.shift, double((xi - x_end).norm()));
                     x[i] = xi;
                     v[i] = vi;
                 }
@@ -201,7 +210,7 @@ void BoundaryCollisionSystem::run(Context& ctx) {
             }
             return count;
         },
-        [](Count a, Count b) { return Count{a.hits + b.hits, a.droplets + b.droplets}; });
+        [](Count a, Count b) { return Count{a.hits + b.hits, a.droplets + b.droplets, std::max(a.shift, b.shift)}; });
     ctx.write(counter::collisions) = total.hits;
     if (m_count_droplets) ctx.write(counter::droplet_contacts) = total.droplets;
     if (m_active_rows) {
@@ -209,6 +218,10 @@ void BoundaryCollisionSystem::run(Context& ctx) {
         out.clear();
         for (const auto& v : hits) out.insert(out.end(), v.begin(), v.end());
         std::sort(out.begin(), out.end());
+        // The jump in float, with a margin for its own rounding (FluidGridSystem adds the
+        // rounding of the drifted positions apart).
+        ctx.write(res::drift_bound).net_shift =
+            total.hits == 0 ? 0.0 : any_moving ? std::numeric_limits<double>::infinity() : total.shift * 1.001;
     }
 }
 

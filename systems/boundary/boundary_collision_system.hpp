@@ -31,7 +31,8 @@ public:
     /// @param boundaries the scene's boundaries (the surfaces to hold the fluid behind).
     /// @param active_rows binned stepping: net the active rows only (the particles evaluated
     /// this step; a sleeping one moves at most lambda_v h between its evaluations, so it is
-    /// netted at the end of its next one) and list the corrected ones in res::collided.
+    /// netted at the end of its next one), list the corrected ones in res::collided and the
+    /// longest jump it gave one in DriftBound::net_shift.
     /// @param count_droplets read this step's fluid neighbour lists (of every row netted) and
     /// count the contacts of rows without fluid neighbours apart.
     explicit BoundaryCollisionSystem(std::vector<BoundaryDesc> boundaries, bool moving = false,
@@ -40,6 +41,7 @@ public:
           m_count_droplets(count_droplets) {}
     std::string name() const override { return "boundary_collision"; }
     Access access() const override;
+    void register_components(World& w) override;
     void run(Context& ctx) override;
     void summarise(const World& w, const RunTotals& totals, nlohmann::json& summary) const override;
 

@@ -17,10 +17,11 @@ namespace sph {
 /// speed bound of res::drift_bound (binned_state.hpp) times the time since the build, plus the
 /// rounding of a float position for each step since. A bound reset after the build (a step that
 /// evaluated every row while the grid was kept) does not cover the time before it: built afresh.
-/// The searches then return what a fresh grid returns, so a run is bit for bit the same either
-/// way. The grid is built afresh when the rows were reordered,
-/// added or restored, when the collision net moved a row off its drift in the last step, when
-/// the bound is void, when the drift would reach kMaxDrift h, or when at least a kBuildShare
+/// A row the collision net moved off its drift (DriftBound::net_shift: a jump to a static
+/// surface, the speed not raised) adds its jump to the drift. The searches then return what a
+/// fresh grid returns, so a run is bit for bit the same either way. The grid is built afresh
+/// when the rows were reordered, added or restored, when the net may have sped a row up (a
+/// moving boundary), when the bound is void, when the drift would reach kMaxDrift h, or when at least a kBuildShare
 /// of the rows is due (where a fresh build and the 27-cell search cost less than the drifted
 /// search's wider reach: docs/results/benchmarks.md). The share is the one the last step
 /// planned (DriftBound::next_due), not this step's selection, so that the grid runs beside
@@ -47,6 +48,7 @@ private:
     std::int64_t m_built_at = 0;  ///< the clock (engine ticks) at the last build
     std::uint64_t m_layout = std::numeric_limits<std::uint64_t>::max();  ///< the fluid rows' layout then
     int m_steps_kept = 0;  ///< steps that kept it since
+    double m_net_shift = 0;  ///< the collision net's jumps since the build, summed (m)
 };
 
 }  // namespace sph

@@ -52,6 +52,12 @@ struct DriftBound {
     /// next step evaluates, give or take woken rows' stale entries and the rows a moving body
     /// adds. FluidGridSystem decides on it, so that it need not wait for that step's selection.
     std::size_t next_due = std::numeric_limits<std::size_t>::max();
+    /// How far the collision net moved a row off its drift in the last step: the largest jump
+    /// it applied (0: it moved none), or infinity when it may also have sped a row up (a hit on
+    /// a moving boundary, whose velocity it adds). A static surface only removes the velocity
+    /// into it, so a netted row keeps the speed bound above and, re-based where the net put it
+    /// (BinnedWakeSystem), drifts on from there: a kept grid adds the jumps to its drift.
+    double net_shift = 0;
     /// The speed bound in m/s (infinity before the first reset).
     double speed(double lambda_v, double lambda_f, double h) const {
         if (!(shortest_raw > 0) || shortest_raw == std::numeric_limits<double>::infinity())
