@@ -45,7 +45,8 @@ UniformGrid::UniformGrid(const Aabb& box, Real cell_size, const std::string& wha
 
 std::size_t UniformGrid::bytes() const {
     return (m_chunk_start.capacity() + m_wide.capacity() + m_sorted_index.capacity()) * sizeof(Index) +
-           m_offset.capacity() * sizeof(std::uint16_t) + (m_sx.capacity() + m_sy.capacity() + m_sz.capacity()) * sizeof(Real);
+           m_offset.capacity() * sizeof(std::uint16_t) + (m_sx.capacity() + m_sy.capacity() + m_sz.capacity()) * sizeof(Real) +
+           m_near.capacity();
 }
 
 void UniformGrid::set_drift(Real drift) {
@@ -135,6 +136,36 @@ void UniformGrid::build(std::span<const Vec3> positions) {
     // The scatter advanced each cell's start to its end (the next cell's start): shift back.
     std::copy_backward(start.begin(), start.begin() + std::ptrdiff_t(cells), start.end());
     start[0] = 0;
+    if (m_mark_empty) {
+        // The occupied cells dilated by one cell along x, then y, then z: the 27-cell max, in
+        // three passes over the cells.
+        std::vector<std::uint8_t> a(cells), b(cells);
+        for (std::size_t c = 0; c < cells; ++c) a[c] = start[c + 1] > start[c];
+        const std::size_t nx = std::size_t(m_dims[0]), ny = std::size_t(m_dims[1]), nz = std::size_t(m_dims[2]);
+        const std::size_t nxy = nx * ny;
+        for (std::size_t row = 0; row < ny * nz; ++row) {  // along x, within each row of cells
+            const std::uint8_t* in = a.data() + row * nx;
+            std::uint8_t* out = b.data() + row * nx;
+            for (std::size_t x = 0; x < nx; ++x)
+                out[x] = in[x] | (x > 0 ? in[x - 1] : 0) | (x + 1 < nx ? in[x + 1] : 0);
+        }
+        for (std::size_t z = 0; z < nz; ++z)  // along y: whole rows of cells at once
+            for (std::size_t y = 0; y < ny; ++y) {
+                const std::uint8_t* in = b.data() + z * nxy + y * nx;
+                std::uint8_t* out = a.data() + z * nxy + y * nx;
+                for (std::size_t x = 0; x < nx; ++x)
+                    out[x] = in[x] | (y > 0 ? in[x - nx] : 0) | (y + 1 < ny ? in[x + nx] : 0);
+            }
+        for (std::size_t z = 0; z < nz; ++z) {  // along z: whole planes
+            const std::uint8_t* in = a.data() + z * nxy;
+            std::uint8_t* out = b.data() + z * nxy;
+            for (std::size_t c = 0; c < nxy; ++c)
+                out[c] = in[c] | (z > 0 ? in[c - nxy] : 0) | (z + 1 < nz ? in[c + nxy] : 0);
+        }
+        m_near.swap(b);
+    } else {
+        std::vector<std::uint8_t>().swap(m_near);
+    }
     // Pack: per chunk of 16 cells its first start, then each cell's offset from it.
     constexpr std::size_t kChunk = std::size_t(1) << kChunkBits;
     Index widest = 0;
@@ -447,6 +478,11 @@ void build_compact(const UniformGrid& grid, std::span<const Vec3> grid_positions
                 const Vec3 xi = query_positions[i];
                 // Each query's cell is computed once: the look-ahead's is kept for the next.
                 const std::int64_t cell = known >= 0 ? known : grid.cell_of(xi);
+                if (grid.empty_around(cell)) {  // no candidate: one lookup
+                    known = -1;
+                    lists.end[i] = Index(used);
+                    continue;
+                }
                 const std::int64_t next_cell = every ? (i + 1 < row_end ? grid.cell_of(query_positions[i + 1]) : -1)
                                                : (k < k_end ? grid.cell_of(query_positions[rows[k]]) : -1);
                 known = next_cell;
@@ -524,6 +560,11 @@ void build_slab(const UniformGrid& grid, std::span<const Vec3> grid_positions,
                 const Index i = subset.all ? Index(q) : subset.indices[q];
                 const Vec3 xi = query_positions[i];
                 const std::int64_t cell = known >= 0 ? known : grid.cell_of(xi);
+                if (grid.empty_around(cell)) {  // no candidate: one lookup
+                    known = -1;
+                    lists.count[i] = 0;
+                    continue;
+                }
                 const std::int64_t next_cell =
                     q + 1 < r.end() ? grid.cell_of(query_positions[subset.all ? Index(q + 1) : subset.indices[q + 1]]) : -1;
                 known = next_cell;

@@ -295,6 +295,7 @@ void build_grids(World& w, const std::vector<Vec3d>& bx) {
         bbox.max = bbox.max.cwiseMax(body.bounds.max);
     }
     w.boundary_grid = UniformGrid(bbox, ph.h, "boundary grid (the domain and every boundary)");
+    w.boundary_grid.mark_empty_neighbourhoods(true);  // most fluid queries meet no wall
     if (!bx.empty()) {
         // Static boundary particles never move: store them in z-order once, then index the
         // grid. Moving bodies keep their ranges (the permutation is the identity there); the

@@ -129,6 +129,76 @@ TEST(NeighbourSearch, CrossSetQueriesIncludeEveryMatch) {
     }
 }
 
+// mark_empty_neighbourhoods (the boundary grid's): a cell is marked empty exactly when its 27
+// cells offer no candidate, for every cell of the grid and for queries outside it (clamped to
+// its border cells); the marks follow a second build; a drifted grid reports none; and cross-set
+// lists, built in both layouts, equal brute force with the marks on. The particles sit in two
+// clusters of a 30-cell box, so most cells are empty around and the rest are not.
+TEST(NeighbourSearch, EmptyNeighbourhoodMarksEqualTheCandidateRanges) {
+    const Real h = 0.1f;
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<Real> u(0, 1);
+    auto cluster = [&](const Vec3& c, Real r, std::size_t n, std::vector<Vec3>& out) {
+        for (std::size_t k = 0; k < n; ++k) out.push_back(c + r * Vec3(u(rng) - 0.5f, u(rng) - 0.5f, u(rng) - 0.5f));
+    };
+    std::vector<Vec3> pts;
+    cluster(Vec3(0.5f, 0.5f, 0.5f), 0.3f, 400, pts);
+    cluster(Vec3(2.6f, 0.2f, 1.2f), 0.2f, 200, pts);
+    UniformGrid grid(Aabb{Vec3d(0, 0, 0), Vec3d(3, 1.5, 1.5)}, h);
+    grid.mark_empty_neighbourhoods(true);
+    // ASSERT_* returns void: the count comes back through `empty`.
+    auto check = [&](const std::vector<Vec3>& at, std::size_t& empty) {
+        grid.build(at);
+        empty = 0;
+        const Eigen::Vector3i d = grid.dims();
+        for (int z = 0; z < d[2]; ++z)
+            for (int y = 0; y < d[1]; ++y)
+                for (int x = 0; x < d[0]; ++x) {
+                    const Vec3 centre = grid.origin() + (Vec3(Real(x), Real(y), Real(z)) + Vec3::Constant(0.5f)) * h;
+                    const std::int64_t c = grid.cell_of(centre);
+                    ASSERT_EQ(c, grid.cell_index({x, y, z}));
+                    ASSERT_EQ(grid.empty_around(c), grid.candidate_ranges(centre).total == 0) << "cell " << x << " " << y << " " << z;
+                    empty += grid.empty_around(c);
+                }
+        for (int k = 0; k < 500; ++k) {  // anywhere, also outside the grid
+            const Vec3 q(u(rng) * 5 - 1, u(rng) * 4 - 1, u(rng) * 4 - 1);
+            ASSERT_EQ(grid.empty_around(grid.cell_of(q)), grid.candidate_ranges(q).total == 0);
+        }
+    };
+    std::size_t empty = 0;
+    check(pts, empty);
+    EXPECT_GT(empty, grid.cell_count() / 2);
+    EXPECT_LT(empty, grid.cell_count());
+    // Every particle moved into one corner: the marks are the new build's.
+    std::vector<Vec3> corner(pts.size(), Vec3(0.05f, 0.05f, 0.05f));
+    check(corner, empty);
+    EXPECT_EQ(empty, grid.cell_count() - 27);  // all in cell (1, 1, 1): the 27 around it are not empty
+    grid.build(pts);
+    grid.set_drift(0.01f);
+    for (std::int64_t c = 0; c < std::int64_t(grid.cell_count()); ++c) ASSERT_FALSE(grid.empty_around(c));
+    grid.build(pts);
+    // Cross-set lists with the marks (the queries spread over the whole box), both layouts.
+    std::vector<Vec3> q;
+    for (int k = 0; k < 3000; ++k) q.emplace_back(u(rng) * 3, u(rng) * 1.5f, u(rng) * 1.5f);
+    for (const bool slab : {false, true}) {
+        std::vector<Index> half;
+        for (Index i = 0; i < q.size(); i += 2) half.push_back(i);
+        NeighbourLists lists;
+        build_neighbour_lists(grid, pts, q, h, false, QuerySubset{half, false, slab}, lists, true);
+        std::size_t found = 0;
+        for (Index i : half) {
+            auto got = std::vector<Index>(lists.of(i).begin(), lists.of(i).end());
+            std::sort(got.begin(), got.end());
+            std::vector<Index> expect;
+            for (Index j = 0; j < pts.size(); ++j)
+                if ((q[i] - pts[j]).squaredNorm() < h * h) expect.push_back(j);
+            ASSERT_EQ(got, expect) << (slab ? "slab" : "compact") << " query " << i;
+            found += !got.empty();
+        }
+        EXPECT_GT(found, 0u);
+    }
+}
+
 // A subset rebuild touches only the subset; a dense cluster forces the capacity to grow and
 // every list to be rebuilt in the new layout.
 TEST(NeighbourSearch, SubsetRebuildAndCapacityGrowth) {
