@@ -52,6 +52,7 @@ public:
     /// particle (empty_around), so that a query of another particle set there (the boundary
     /// grid's fluid queries, about two in three of which meet no candidate on `dam_break_obstacles`)
     /// is answered by one lookup. Off by default: a set queried against itself is never empty.
+    /// Costs one byte a cell (and two more while a build computes them).
     void mark_empty_neighbourhoods(bool on) { m_mark_empty = on; }
     /// @brief Whether no particle lies in the 27 cells around cell c (so no query there has a
     /// candidate); false when the grid does not mark them or carries a drift.
