@@ -15,7 +15,7 @@ Access FluidGridSystem::access() const {
     return Access()
         .read(fluid(comp::position))
         .write(res::fluid_grid)
-        .read_if(m_keep, res::drift_bound, res::collided)
+        .read_if(m_keep, res::drift_bound)
         .write_if(m_keep, counter::grid_kept);
 }
 
@@ -27,9 +27,9 @@ bool FluidGridSystem::kept(Context& ctx) {
     const UniformGrid& grid = ctx.read(res::fluid_grid);
     const std::size_t n = ctx.size(SetId::Fluid);
     const DriftBound& bound = ctx.read(res::drift_bound);
-    // The collision net's jumps in the last step (rows re-based where it put them): added up
-    // since the build, before any return, so that the sum is whole whenever the grid is kept.
-    if (!ctx.read(res::collided).empty()) m_net_shift += bound.net_shift;
+    // The collision net's jumps in the last step (0 when it moved no row): added up since the
+    // build, before any return, so that the sum is whole whenever the grid is kept.
+    m_net_shift += bound.net_shift;
     if (grid.particle_count() != n || ctx.layout(SetId::Fluid) != m_layout || !(m_net_shift < kMaxDrift * ctx.physics().h))
         return false;
     if (double(bound.next_due) >= kBuildShare * double(n)) return false;
