@@ -157,6 +157,27 @@ BENCHMARK(BM_Binned_fluid_neighbours_drifted)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
+/// BM_Binned_drift_around_due/<particles>/<due per mille>: DriftSystem's lazy placement on a step
+/// that keeps the grid (declared drift 0.1 h): the due rows and the rows of the cells within
+/// h + drift of each, against BM_Binned_drift (every row). `placed` is the share placed (every
+/// row once the cells reach DriftSystem::kStreamShare of them).
+void BM_Binned_drift_around_due(benchmark::State& state) {
+    Pipeline p(std::size_t(state.range(0)), double(state.range(1)) / 1000.0);
+    DriftSystem s(DriftSystem::Rows::AroundDue);
+    p.w->fluid_grid.set_drift(Real(0.1) * p.w->physics.h);
+    for (auto _ : state) {
+        run_system(s, *p.w);
+        benchmark::ClobberMemory();
+    }
+    const double n = double(p.w->fluid.size());
+    state.counters["active_fraction"] = double(p.w->active_set.size()) / n;
+    state.counters["placed"] = double(p.w->placed.size()) / n;
+}
+BENCHMARK(BM_Binned_drift_around_due)
+    ->ArgsProduct({{100'000, 1'000'000}, {100, 10, 1}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
 #define SPH_BINNED_BENCH(system)                                                          \
     static void BM_Binned_##system(benchmark::State& state) { bench_named(state, #system); } \
     BENCHMARK(BM_Binned_##system)->Apply(args)

@@ -42,7 +42,9 @@ export TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:suppressions=$PWD/t
 long='RunRobustnessCli|ParaViewReadsRun|BlenderImportsRun|Hydrostatic|DamBreak|Stirring\.Pushed|MillionSteps|EqualStepsReproduceGlobal|InstallAndConsume|SphRunCli|ToolsPlots|CheckpointCli|ModeAgreement|MartinMoyce|KoshizukaOka|PcisphSmoothness|SphStudy|ResolutionStudy|StandingWave|WallEnergy'
 
 stage "2/4 AddressSanitizer + UndefinedBehaviorSanitizer: unit tests"
-cmake -S . -B build-asan "${sanitizer_build[@]}" -DSPH_SANITIZE="address;undefined" >/dev/null
+# The test sources at -O0 (SPH_TEST_FLAGS; the engine stays at -O1): 13 % less build time for
+# this stage, the same test time (docs/results/ci.md).
+cmake -S . -B build-asan "${sanitizer_build[@]}" -DSPH_SANITIZE="address;undefined" -DSPH_TEST_FLAGS=-O0 >/dev/null
 # sph-run (the corpus) and every test executable holding a test outside the long pattern, read
 # from stage 1's test list (an executable's tests carry its name as label); the others are not
 # built, and their placeholder tests, <name>_NOT_BUILT, are excluded with the long ones.

@@ -96,8 +96,8 @@ public:
         return *this;
     }
     /// @brief Declares that the system writes its particle columns only at the rows listed in
-    /// this index resource (the active set): the engine's finiteness check then reads those
-    /// rows only, so its cost follows the work.
+    /// this index resource (the active set), each row at most once: the engine's finiteness
+    /// check then reads those rows only, so its cost follows the work.
     template <class T>
     Access& rows(const Resource<T>& r) {
         m_rows = key_of(r);

@@ -174,6 +174,10 @@ struct World {
     /// step's time for the pair systems (the active rows and their fluid neighbours, ascending;
     /// DriftRowsSystem). The other sleeping rows are drifted lazily: see `synchronise`.
     std::vector<Index> drifted;
+    /// Binned stepping with lazy positions: the rows whose position the system running brought
+    /// to the step's time (FluidGridSystem: every row, in order, when it builds; DriftSystem:
+    /// the rows a kept grid's searches around the due rows read). The others lag until read.
+    std::vector<Index> placed;
     /// Set by a recipe whose step leaves rows behind the clock (binned stepping's lazy drift):
     /// brings every fluid row to the clock's time. Simulation::synchronise calls it before
     /// anything reads the whole fluid (observers, the spatial sort, the end of a run).
@@ -213,6 +217,7 @@ inline constexpr Resource<std::vector<Index>> active_set{"fluid.active_set", &Wo
 inline constexpr Resource<std::vector<Index>> halo_set{"fluid.halo_set", &World::halo_set};
 inline constexpr Resource<std::vector<Index>> collided{"fluid.collided", &World::collided};
 inline constexpr Resource<std::vector<Index>> drifted{"fluid.drifted", &World::drifted};
+inline constexpr Resource<std::vector<Index>> placed{"fluid.placed", &World::placed};
 inline constexpr Resource<std::vector<MovingBody>> moving_bodies{"boundary.moving_bodies", &World::moving_bodies};
 }  // namespace res
 

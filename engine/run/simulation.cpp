@@ -101,7 +101,11 @@ void Simulation::trace_non_finite(std::size_t system) {
     if (access.written_rows() == key_of(res::active_set)) rows = &m_world.active_set;
     if (access.written_rows() == key_of(res::collided)) rows = &m_world.collided;
     if (access.written_rows() == key_of(res::drifted)) rows = &m_world.drifted;
+    if (access.written_rows() == key_of(res::placed)) rows = &m_world.placed;
     const std::size_t n = store.size();
+    // A row list names each row at most once (Access::rows), so n of them are every row: read
+    // in order, without the index.
+    if (rows != nullptr && rows->size() == n) rows = nullptr;
     // Recipe order is a topological order of the graph: a value can only reach a later system,
     // so the earliest one with a non-finite output is where it was produced.
     auto record = [&](Fault& f, std::size_t particle, const std::string& col) {

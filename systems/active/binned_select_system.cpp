@@ -37,7 +37,8 @@ void sort_runs(std::vector<Index>& v) {
 
 Access BinnedSelectSystem::access() const {
     return Access()
-        .read(fluid(comp::position), fluid(comp::dt), res::moving_bodies)
+        .read(fluid(comp::dt))
+        .read_if(m_moving, fluid(comp::position), res::moving_bodies)
         .write(fluid(comp::bin), fluid(comp::ti_end), fluid(comp::active), res::bin_timeline, res::due_buckets,
                res::active_set, counter::active);
 }
@@ -102,8 +103,8 @@ void BinnedSelectSystem::run(Context& ctx) {
                 }
             buckets.due.erase(it);
         }
-        const auto& bodies = ctx.read(res::moving_bodies);
-        if (!bodies.empty()) {
+        if (m_moving && !ctx.read(res::moving_bodies).empty()) {
+            const auto& bodies = ctx.read(res::moving_bodies);
             // Within reach of a moving body: due now (its step so far ends here), on the largest
             // bin `now` allows. Its entry at the old end goes stale.
             const auto x = ctx.read(fluid(comp::position));

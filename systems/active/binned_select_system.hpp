@@ -14,7 +14,10 @@ namespace sph {
 class BinnedSelectSystem final : public System {
 public:
     /// @param dt_min, dt_max the scene's step range (they fix the timeline's quantum).
-    BinnedSelectSystem(double dt_min, double dt_max) : m_dt_min(dt_min), m_dt_max(dt_max) {}
+    /// @param moving the scene has a moving body: every row's position is read (the wake-up
+    /// test); without, no position is, so the rows may be left behind (lazy positions).
+    BinnedSelectSystem(double dt_min, double dt_max, bool moving = true)
+        : m_dt_min(dt_min), m_dt_max(dt_max), m_moving(moving) {}
     std::string name() const override { return "binned_select"; }
     Access access() const override;
     /// @brief Registers bin, ti_end, dt, t_last, active and the timeline (Kept) and buckets.
@@ -23,6 +26,7 @@ public:
 
 private:
     double m_dt_min, m_dt_max;
+    bool m_moving;
 };
 
 }  // namespace sph

@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <numeric>
 
 #include "engine/data/components.hpp"
 #include "engine/data/world.hpp"
@@ -53,15 +54,38 @@ void drift_fluid(World& w) {
 
 // ---- drift ------------------------------------------------------------------------------------
 
+void place_every_row(std::span<Vec3> x, std::span<const Vec3> x0, std::span<const Vec3> v0, std::span<const Vec3> a,
+                     std::span<const std::int64_t> t_last, Tick now) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), kGrain), [&](const auto& r) {
+        for (std::size_t i = r.begin(); i < r.end(); ++i) {
+            if (t_last[i] == now) continue;
+            const Real dt = drift_interval(now, t_last[i]);
+            x[i] = drifted_position(x0[i], drifted_velocity(v0[i], a[i], dt), dt);
+        }
+    });
+}
+
 Access DriftSystem::access() const {
-    return Access()
+    Access acc = Access()
         .read(fluid(comp::position_last), fluid(comp::velocity_last), fluid(comp::acceleration), fluid(comp::t_last))
         .write(fluid(comp::position));
+    if (m_rows == Rows::AroundDue) acc.read(res::fluid_grid, res::active_set).write(res::placed).rows(res::placed);
+    return acc;
 }
 
 void DriftSystem::register_components(World& w) {
+    // The base state at t_last = 0 is the initial state (t_last is 0 until a row is evaluated,
+    // and a row whose t_last is the clock's time holds x = x_last, v = v_last: what
+    // BoundaryNeighbourSystem's from_base reads at the first step).
+    const bool fresh = !w.fluid.store.has(comp::position_last.name);
     w.fluid.store.add(comp::position_last);
     w.fluid.store.add(comp::velocity_last);
+    if (fresh) {
+        const auto x = w.fluid.store.get(comp::position);
+        const auto v = w.fluid.store.get(comp::velocity);
+        std::copy(x.begin(), x.end(), w.fluid.store.get(comp::position_last).begin());
+        std::copy(v.begin(), v.end(), w.fluid.store.get(comp::velocity_last).begin());
+    }
     w.fluid.store.add(comp::density_last);
     w.fluid.store.add(comp::drho_dt);
     w.fluid.store.add(comp::t_last);
@@ -76,13 +100,77 @@ void DriftSystem::run(Context& ctx) {
     const auto a = ctx.read(fluid(comp::acceleration));
     const auto t_last = ctx.read(fluid(comp::t_last));
     const Tick now = ctx.clock().t_ticks;
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), kGrain), [&](const auto& r) {
-        for (std::size_t i = r.begin(); i < r.end(); ++i) {
-            if (t_last[i] == now) continue;
-            const Real dt = drift_interval(now, t_last[i]);
-            x[i] = drifted_position(x0[i], drifted_velocity(v0[i], a[i], dt), dt);
+    if (m_rows == Rows::Every) {
+        place_every_row(x, x0, v0, a, t_last, now);
+        return;
+    }
+    auto& placed = ctx.write(res::placed);
+    placed.clear();  // FluidGridSystem's list, checked when it ran
+    const UniformGrid& grid = ctx.read(res::fluid_grid);
+    // A grid built this step: FluidGridSystem placed every row.
+    if (grid.drift() == 0) return;
+    auto place = [&](std::size_t i) {
+        if (t_last[i] == now) return;
+        const Real dt = drift_interval(now, t_last[i]);
+        x[i] = drifted_position(x0[i], drifted_velocity(v0[i], a[i], dt), dt);
+    };
+    // Each due row (its current cell decides which cells its search reads), then the cells
+    // within h + drift of it (FluidNeighbourSystem's reach against a kept grid, the ranges of
+    // UniformGrid::ranges_within), each cell once.
+    const auto& set = ctx.read(res::active_set);
+    const Real reach = Real(ctx.physics().h) + grid.drift();
+    const std::size_t n = x.size();
+    const auto limit = std::size_t(kStreamShare * double(n));
+    m_cell_mark.resize(grid.cell_count(), 0);
+    m_cells.clear();
+    std::size_t rows = 0;
+    for (std::size_t k = 0; k < set.size() && rows < limit; ++k) {
+        place(set[k]);
+        const Eigen::Vector3i lo = grid.cell_coords(x[set[k]] - Vec3::Constant(reach));
+        const Eigen::Vector3i hi = grid.cell_coords(x[set[k]] + Vec3::Constant(reach));
+        for (int cz = lo[2]; cz <= hi[2]; ++cz)
+            for (int cy = lo[1]; cy <= hi[1]; ++cy) {
+                const std::int64_t row = grid.cell_index({0, cy, cz});
+                for (std::int64_t c = row + lo[0]; c <= row + hi[0]; ++c) {
+                    if (m_cell_mark[std::size_t(c)]) continue;
+                    m_cell_mark[std::size_t(c)] = 1;
+                    m_cells.push_back(c);
+                    rows += grid.cell_start(c + 1) - grid.cell_start(c);
+                }
+            }
+    }
+    for (std::int64_t c : m_cells) m_cell_mark[std::size_t(c)] = 0;
+    if (rows >= limit) {
+        // A large share of the fluid (scattered due rows): every row, streamed, costs less.
+        place_every_row(x, x0, v0, a, t_last, now);
+        placed.resize(n);
+        std::iota(placed.begin(), placed.end(), Index(0));
+        return;
+    }
+    // By cell in ascending order (the rows of a cell are contiguous slots; the order makes the
+    // list, and so the engine's check of it, deterministic), in parallel over the cells.
+    std::sort(m_cells.begin(), m_cells.end());
+    const auto slots = grid.sorted_index();
+    placed.resize(rows);
+    m_offset.resize(m_cells.size() + 1);
+    m_offset[0] = 0;
+    for (std::size_t k = 0; k < m_cells.size(); ++k)
+        m_offset[k + 1] = m_offset[k] + (grid.cell_start(m_cells[k] + 1) - grid.cell_start(m_cells[k]));
+    auto place_cells = [&](std::size_t b, std::size_t e) {
+        for (std::size_t k = b; k < e; ++k) {
+            Index out = m_offset[k];
+            for (Index s = grid.cell_start(m_cells[k]), s_end = grid.cell_start(m_cells[k] + 1); s < s_end; ++s) {
+                place(slots[s]);
+                placed[out++] = slots[s];
+            }
         }
-    });
+    };
+    if (rows < kGrain) {
+        place_cells(0, m_cells.size());
+        return;
+    }
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m_cells.size(), 64),
+                      [&](const auto& r) { place_cells(r.begin(), r.end()); });
 }
 
 // ---- drift_rows -------------------------------------------------------------------------------

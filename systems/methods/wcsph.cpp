@@ -43,18 +43,23 @@ Recipe make_wcsph_recipe(const Scene& scene) {
     if (mode == SteppingMode::Constant) r.step.push_back(std::make_unique<ConstantDtSystem>(stepping.dt));
     if (mode == SteppingMode::Individual)
         r.step.push_back(std::make_unique<SelectActiveSystem>(stepping.activation));
-    // binned: every row's position at the step's time, before anything reads one (the lazy
-    // drift, systems/integrate/drift_system.hpp).
-    if (binned) r.step.push_back(std::make_unique<DriftSystem>());
-    if (binned) r.step.push_back(std::make_unique<BinnedSelectSystem>(stepping.dt_min, stepping.dt_max));
-    // binned: the grid kept while the due rows are few and no row can have moved far.
-    r.step.push_back(binned && stepping.keep_grid ? std::make_unique<FluidGridSystem>(stepping)
-                                                  : std::make_unique<FluidGridSystem>());
-    // binned reads only the active particles' lists: compact, the others emptied.
-    r.step.push_back(std::make_unique<FluidNeighbourSystem>(individual, !binned));
-    if (boundary) r.step.push_back(std::make_unique<BoundaryNeighbourSystem>(individual, !binned));
     // The walls' pressure from the fluid around them (Adami et al. 2012), once the fluid's is known.
     const bool extrapolated = boundary && wall_pressure(scene) == WallPressure::Extrapolated;
+    // binned: the lazy drift (systems/integrate/drift_system.hpp). Positions are placed lazily
+    // (the grid's build places every row, a kept grid's step the rows around the due ones)
+    // unless something reads positions beyond the due rows' reach: a moving body's wake-up test,
+    // the extrapolated walls' gather, a grid built every step. Then every row's position at the
+    // step's time, before anything reads one.
+    const bool lazy_positions = binned && stepping.keep_grid && !moving && !extrapolated;
+    if (binned && !lazy_positions) r.step.push_back(std::make_unique<DriftSystem>());
+    if (binned) r.step.push_back(std::make_unique<BinnedSelectSystem>(stepping.dt_min, stepping.dt_max, moving));
+    // binned: the grid kept while the due rows are few and no row can have moved far.
+    r.step.push_back(binned && stepping.keep_grid ? std::make_unique<FluidGridSystem>(stepping, lazy_positions)
+                                                  : std::make_unique<FluidGridSystem>());
+    if (lazy_positions) r.step.push_back(std::make_unique<DriftSystem>(DriftSystem::Rows::AroundDue));
+    // binned reads only the active particles' lists: compact, the others emptied.
+    r.step.push_back(std::make_unique<FluidNeighbourSystem>(individual, !binned));
+    if (boundary) r.step.push_back(std::make_unique<BoundaryNeighbourSystem>(individual, !binned, lazy_positions));
     // binned: velocity, density and pressure of the rows the pair systems read (every row when
     // the extrapolated walls read the fluid beyond the active rows' lists).
     const bool continuity = density_form(scene) == DensityForm::Continuity;

@@ -5,19 +5,44 @@
 #include "engine/data/components.hpp"
 #include "engine/data/world.hpp"
 #include "engine/graph/context.hpp"
+#include "systems/integrate/drift.hpp"
 #include "systems/neighbours/fluid_neighbours_system.hpp"
 
 namespace sph {
 
 Access BoundaryNeighbourSystem::access() const {
     return Access()
-        .read(fluid(comp::position), boundary(comp::position), res::boundary_grid)
+        .read(boundary(comp::position), res::boundary_grid)
+        .read_if(!m_from_base, fluid(comp::position))
+        .read_if(m_from_base, fluid(comp::position_last), fluid(comp::velocity_last), fluid(comp::acceleration),
+                 fluid(comp::t_last))
         .write(res::boundary_neighbours)
         .read_if(m_individual, res::active_set)
         .write_if(m_individual && m_keep_others, counter::boundary_contributions);
 }
 void BoundaryNeighbourSystem::run(Context& ctx) {
-    build_neighbour_lists(ctx.read(res::boundary_grid), ctx.read(boundary(comp::position)), ctx.read(fluid(comp::position)),
+    std::span<const Vec3> x;
+    if (m_from_base) {
+        // He Alg. 2 lines 20-21 for the active rows (drift.hpp), what the drift places there.
+        const auto x0 = ctx.read(fluid(comp::position_last));
+        const auto v0 = ctx.read(fluid(comp::velocity_last));
+        const auto a = ctx.read(fluid(comp::acceleration));
+        const auto t_last = ctx.read(fluid(comp::t_last));
+        const Tick now = ctx.clock().t_ticks;
+        m_query.resize(x0.size());
+        for (Index i : ctx.read(res::active_set)) {
+            if (t_last[i] == now) {
+                m_query[i] = x0[i];
+                continue;
+            }
+            const Real dt = drift_interval(now, t_last[i]);
+            m_query[i] = drifted_position(x0[i], drifted_velocity(v0[i], a[i], dt), dt);
+        }
+        x = m_query;
+    } else {
+        x = ctx.read(fluid(comp::position));
+    }
+    build_neighbour_lists(ctx.read(res::boundary_grid), ctx.read(boundary(comp::position)), x,
                           ctx.physics().h, false,
                           active_query_subset(ctx, m_individual, m_keep_others), ctx.write(res::boundary_neighbours), ctx.physics().simd);
     if (m_individual && m_keep_others) {  // He's scheme: the work counter of the rows built

@@ -3,20 +3,27 @@
 #include "systems/neighbours/fluid_grid_system.hpp"
 
 #include <cmath>
+#include <numeric>
 
 #include "engine/data/components.hpp"
 #include "engine/data/world.hpp"
 #include "engine/graph/context.hpp"
+#include "systems/integrate/drift_system.hpp"
 #include "systems/timestep/binned_state.hpp"
 
 namespace sph {
 
 Access FluidGridSystem::access() const {
-    return Access()
-        .read(fluid(comp::position))
-        .write(res::fluid_grid)
-        .read_if(m_keep, res::drift_bound)
-        .write_if(m_keep, counter::grid_kept);
+    Access acc = Access()
+                     .read(fluid(comp::position))
+                     .write(res::fluid_grid)
+                     .read_if(m_keep, res::drift_bound)
+                     .write_if(m_keep, counter::grid_kept);
+    if (m_place)
+        acc.read(fluid(comp::position_last), fluid(comp::velocity_last), fluid(comp::acceleration), fluid(comp::t_last))
+            .write(fluid(comp::position), res::placed)
+            .rows(res::placed);
+    return acc;
 }
 
 void FluidGridSystem::register_components(World& w) {
@@ -54,11 +61,23 @@ void FluidGridSystem::run(Context& ctx) {
     if (m_keep) {
         const bool keep = kept(ctx);
         ctx.write(counter::grid_kept) = keep;
-        if (keep) return;
+        if (keep) {
+            if (m_place) ctx.write(res::placed).clear();  // DriftSystem places the rows read
+            return;
+        }
         m_built_at = ctx.clock().t_ticks;
         m_layout = ctx.layout(SetId::Fluid);
         m_steps_kept = 0;
         m_net_shift = 0;
+    }
+    if (m_place) {
+        // Every row at the step's time, the positions the build reads (drift_system.hpp).
+        auto x = ctx.write(fluid(comp::position));
+        place_every_row(x, ctx.read(fluid(comp::position_last)), ctx.read(fluid(comp::velocity_last)),
+                        ctx.read(fluid(comp::acceleration)), ctx.read(fluid(comp::t_last)), ctx.clock().t_ticks);
+        auto& placed = ctx.write(res::placed);
+        placed.resize(x.size());
+        std::iota(placed.begin(), placed.end(), Index(0));
     }
     ctx.write(res::fluid_grid).build(ctx.read(fluid(comp::position)));
 }

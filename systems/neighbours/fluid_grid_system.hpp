@@ -30,8 +30,10 @@ class FluidGridSystem final : public System {
 public:
     FluidGridSystem() = default;
     /// @param stepping the scene's lambda_v and lambda_f (He eq. 6-7), which the drift bound needs
-    explicit FluidGridSystem(const SteppingParams& stepping)
-        : m_keep(true), m_lambda_v(stepping.lambda_v), m_lambda_f(stepping.lambda_f) {}
+    /// @param place lazy positions (drift_system.hpp): a build first brings every row's position
+    /// to the step's time and lists every row in res::placed; a kept grid places none.
+    explicit FluidGridSystem(const SteppingParams& stepping, bool place = false)
+        : m_keep(true), m_place(place), m_lambda_v(stepping.lambda_v), m_lambda_f(stepping.lambda_f) {}
     static constexpr double kMaxDrift = 0.25;    ///< of h
     static constexpr double kBuildShare = 1.0 / 64; ///< of the rows due
     std::string name() const override { return "fluid_grid"; }
@@ -44,6 +46,7 @@ private:
     bool kept(Context& ctx);
 
     bool m_keep = false;
+    bool m_place = false;
     double m_lambda_v = 0, m_lambda_f = 0;
     std::int64_t m_built_at = 0;  ///< the clock (engine ticks) at the last build
     std::uint64_t m_layout = std::numeric_limits<std::uint64_t>::max();  ///< the fluid rows' layout then

@@ -180,3 +180,80 @@ TEST(Drift, AllRowsAndTheSynchroniseHook) {
             ASSERT_LT((x[i].cast<double>() - f.x(i)).norm(), 1e-9 + 2e-7 * 0.4) << "row " << i;
         }
 }
+
+// Lazy positions (DriftSystem::Rows::AroundDue) on a step that keeps the grid: the grid was built
+// at the base positions and every row has since moved at most d (declared: set_drift(d), d the
+// largest displacement of the closed form, 0.10-0.15 h here). Brute force over all rows: every
+// row whose position at the build lies within h + d of a due row's current position (what a
+// kept grid's search reads) is placed, its bits those DriftSystem(Every) writes; every other
+// row is untouched; res::placed lists each placed row once. At one due row and a cluster of
+// eight (the cell-by-cell path: placed under 1/16 of the rows) and at 60 scattered due rows
+// (their cells reach more: every row, streamed). With a grid built this step (drift 0) it
+// places nothing (FluidGridSystem placed every row).
+TEST(Drift, AroundDuePlacesWhatAKeptGridsSearchReads) {
+    Fixture f, eager;
+    const std::size_t n = f.w.fluid.size();
+    run_system(DriftSystem(), eager.w);
+    const auto xe = eager.w.fluid.store.get(comp::position);
+    double d = 0;
+    for (std::size_t i = 0; i < n; ++i) d = std::max(d, (xe[i] - f.x0[i]).cast<double>().norm());
+    const Real h = f.w.physics.h;
+    ASSERT_LT(d, 0.25 * h);
+    ASSERT_GT(d, 0.05 * h);
+    const Real drift = Real(d * 1.001);
+    // A cluster: the rows of the cell of row n/2, up to eight.
+    std::vector<Index> cluster;
+    const std::int64_t c = f.w.fluid_grid.cell_of(f.x0[n / 2]);
+    for (Index k = f.w.fluid_grid.cell_start(c); k < f.w.fluid_grid.cell_start(c + 1) && cluster.size() < 8; ++k)
+        cluster.push_back(f.w.fluid_grid.sorted_index()[k]);
+    std::sort(cluster.begin(), cluster.end());
+    std::vector<Index> scattered;
+    for (std::size_t i = 0; i < 60; ++i) scattered.push_back(Index(i * (n / 60)));
+    struct Case {
+        const char* name;
+        std::vector<Index> due;
+        bool partial;
+    };
+    for (const Case& k : {Case{"one row", {Index(n / 3)}, true}, Case{"a cluster", cluster, true},
+                          Case{"60 scattered", scattered, false}}) {
+        Fixture g;  // positions at the build, the grid kept with its drift
+        World& w = g.w;
+        w.fluid_grid.set_drift(drift);
+        w.active_set = k.due;
+        DriftSystem sys(DriftSystem::Rows::AroundDue);
+        run_system(sys, w);
+        const auto x = w.fluid.store.get(comp::position);
+        std::vector<std::uint8_t> placed(n, 0);
+        for (Index i : w.placed) {
+            ASSERT_EQ(placed[i], 0) << k.name << ": row " << i << " listed twice";
+            placed[i] = 1;
+        }
+        std::size_t reached = 0;
+        for (std::size_t j = 0; j < n; ++j) {
+            bool near = false;
+            for (Index i : k.due) near |= (f.x0[j] - xe[i]).cwiseAbs().maxCoeff() < h + drift;
+            reached += near;
+            if (near) {
+                ASSERT_TRUE(placed[j]) << k.name << ": row " << j << " within reach of a due row not placed";
+            }
+            if (placed[j]) {
+                ASSERT_EQ(x[j], xe[j]) << k.name << ": row " << j;
+            } else {
+                ASSERT_EQ(x[j], f.x0[j]) << k.name << ": row " << j << " written but not listed";
+            }
+        }
+        std::printf("%s: %zu due rows, %zu rows within reach, %zu placed (%.1f %% of %zu)\n", k.name, k.due.size(),
+                    reached, w.placed.size(), 100.0 * double(w.placed.size()) / double(n), n);
+        if (k.partial) {
+            EXPECT_LT(double(w.placed.size()), DriftSystem::kStreamShare * double(n)) << k.name;
+        } else {
+            EXPECT_EQ(w.placed.size(), n) << k.name;
+        }
+        // A grid built this step: nothing placed here.
+        Fixture b;
+        b.w.active_set = k.due;
+        run_system(DriftSystem(DriftSystem::Rows::AroundDue), b.w);
+        EXPECT_TRUE(b.w.placed.empty());
+        EXPECT_TRUE(std::equal(f.x0.begin(), f.x0.end(), b.w.fluid.store.get(comp::position).begin()));
+    }
+}
