@@ -2,6 +2,9 @@
 // candidates from the 27 surrounding cells, exact test |x_i - x_j| < h.
 #include "systems/neighbours/boundary_neighbours_system.hpp"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include "engine/data/components.hpp"
 #include "engine/data/world.hpp"
 #include "engine/graph/context.hpp"
@@ -29,15 +32,19 @@ void BoundaryNeighbourSystem::run(Context& ctx) {
         const auto a = ctx.read(fluid(comp::acceleration));
         const auto t_last = ctx.read(fluid(comp::t_last));
         const Tick now = ctx.clock().t_ticks;
+        const auto& set = ctx.read(res::active_set);
         m_query.resize(x0.size());
-        for (Index i : ctx.read(res::active_set)) {
-            if (t_last[i] == now) {
-                m_query[i] = x0[i];
-                continue;
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, set.size(), 4096), [&](const auto& r) {
+            for (std::size_t k = r.begin(); k < r.end(); ++k) {
+                const Index i = set[k];
+                if (t_last[i] == now) {
+                    m_query[i] = x0[i];
+                    continue;
+                }
+                const Real dt = drift_interval(now, t_last[i]);
+                m_query[i] = drifted_position(x0[i], drifted_velocity(v0[i], a[i], dt), dt);
             }
-            const Real dt = drift_interval(now, t_last[i]);
-            m_query[i] = drifted_position(x0[i], drifted_velocity(v0[i], a[i], dt), dt);
-        }
+        });
         x = m_query;
     } else {
         x = ctx.read(fluid(comp::position));
