@@ -17,6 +17,12 @@ inline Vec3 drifted_velocity(const Vec3& v0, const Vec3& a, Real dt) { return v0
 /// x_i = x_i(t_last) + Delta t v_i, with the line-20 velocity (line 21).
 inline Vec3 drifted_position(const Vec3& x0, const Vec3& v, Real dt) { return x0 + dt * v; }
 
+/// x_i at `now` from the base state, lines 20-21 together (the position the drift places).
+inline Vec3 position_at(Tick now, std::int64_t t_last, const Vec3& x0, const Vec3& v0, const Vec3& a) {
+    const Real dt = drift_interval(now, t_last);
+    return drifted_position(x0, drifted_velocity(v0, a, dt), dt);
+}
+
 /// rho_i = rho_i(t_last) + Delta t drho_i/dt (line 9; He eq. 5 gives the slope).
 inline Real drifted_density(Real rho0, Real drho, Real dt) { return rho0 + dt * drho; }
 

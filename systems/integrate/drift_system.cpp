@@ -57,11 +57,8 @@ void drift_fluid(World& w) {
 void place_every_row(std::span<Vec3> x, std::span<const Vec3> x0, std::span<const Vec3> v0, std::span<const Vec3> a,
                      std::span<const std::int64_t> t_last, Tick now) {
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), kGrain), [&](const auto& r) {
-        for (std::size_t i = r.begin(); i < r.end(); ++i) {
-            if (t_last[i] == now) continue;
-            const Real dt = drift_interval(now, t_last[i]);
-            x[i] = drifted_position(x0[i], drifted_velocity(v0[i], a[i], dt), dt);
-        }
+        for (std::size_t i = r.begin(); i < r.end(); ++i)
+            if (t_last[i] != now) x[i] = position_at(now, t_last[i], x0[i], v0[i], a[i]);
     });
 }
 
@@ -110,9 +107,7 @@ void DriftSystem::run(Context& ctx) {
     // A grid built this step: FluidGridSystem placed every row.
     if (grid.drift() == 0) return;
     auto place = [&](std::size_t i) {
-        if (t_last[i] == now) return;
-        const Real dt = drift_interval(now, t_last[i]);
-        x[i] = drifted_position(x0[i], drifted_velocity(v0[i], a[i], dt), dt);
+        if (t_last[i] != now) x[i] = position_at(now, t_last[i], x0[i], v0[i], a[i]);
     };
     // Each due row (its current cell decides which cells its search reads), then the cells
     // within h + drift of it (FluidNeighbourSystem's reach against a kept grid, the ranges of
