@@ -160,7 +160,7 @@ void DriftSystem::run(Context& ctx) {
             }
         }
     };
-    if (rows < kGrain) {
+    if (rows < kParallelRows) {
         place_cells(0, m_cells.size());
         return;
     }

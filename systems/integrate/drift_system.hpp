@@ -51,6 +51,8 @@ public:
     /// every row instead, in the streaming pass: a row placed cell by cell costs up to ~18 times
     /// one streamed (BM_Binned_drift_around_due against BM_Binned_drift, scattered due rows).
     static constexpr double kStreamShare = 1.0 / 16;
+    /// A placement by cells of this many rows or more runs in parallel over the cells.
+    static constexpr std::size_t kParallelRows = 4096;
     std::string name() const override { return "drift"; }
     Access access() const override;
     /// Registers the base-state columns and installs drift_fluid as World::synchronise.

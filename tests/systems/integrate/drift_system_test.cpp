@@ -44,8 +44,9 @@ struct Fixture {
     std::vector<Real> rho0, drho;
     std::vector<std::int64_t> t_last;
 
-    Fixture() {
-        initialise_world(w, test::tank_scene(Vec3d(0.4, 0.2, 0.15), Vec3d(0.5, 0.3, 0.2), 0.005));
+    /// The block 0.4 x 0.2 x 0.15 m at r = 5 mm (12,000 rows) unless given.
+    explicit Fixture(Vec3d fluid = Vec3d(0.4, 0.2, 0.15), Vec3d box = Vec3d(0.5, 0.3, 0.2), double r = 0.005) {
+        initialise_world(w, test::tank_scene(fluid, box, r));
         test::jitter(w, 11, 0.3f);
         DriftSystem().register_components(w);
         DriftRowsSystem().register_components(w);
@@ -183,24 +184,85 @@ TEST(Drift, AllRowsAndTheSynchroniseHook) {
 
 // Lazy positions (DriftSystem::Rows::AroundDue) on a step that keeps the grid: the grid was built
 // at the base positions and every row has since moved at most d (declared: set_drift(d), d the
-// largest displacement of the closed form, 0.10-0.15 h here). Brute force over all rows: every
+// largest displacement of the closed form, 0.05-0.25 h here). Brute force over all rows: every
 // row whose position at the build lies within h + d of a due row's current position (what a
 // kept grid's search reads) is placed, its bits those DriftSystem(Every) writes; every other
-// row is untouched; res::placed lists each placed row once. At one due row and a cluster of
-// eight (the cell-by-cell path: placed under 1/16 of the rows) and at 60 scattered due rows
-// (their cells reach more: every row, streamed). With a grid built this step (drift 0) it
-// places nothing (FluidGridSystem placed every row).
+// row is untouched; res::placed lists each placed row once. With a grid built this step
+// (drift 0) it places nothing (FluidGridSystem placed every row).
+namespace {
+
+struct Around {
+    Fixture base;          ///< the positions at the build (x0)
+    std::vector<Vec3> xe;  ///< every row placed by DriftSystem(Every): the bits expected
+    Real drift = 0;
+    Vec3d fluid, box;
+    double r;
+
+    Around(Vec3d fluid_max, Vec3d box_max, double radius)
+        : base(fluid_max, box_max, radius), fluid(fluid_max), box(box_max), r(radius) {
+        Fixture eager(fluid, box, r);
+        run_system(DriftSystem(), eager.w);
+        const auto x = eager.w.fluid.store.get(comp::position);
+        xe.assign(x.begin(), x.end());
+        double d = 0;
+        for (std::size_t i = 0; i < xe.size(); ++i) d = std::max(d, (xe[i] - base.x0[i]).cast<double>().norm());
+        const Real h = base.w.physics.h;
+        EXPECT_LT(d, 0.25 * h);
+        EXPECT_GT(d, 0.05 * h);
+        drift = Real(d * 1.001);
+    }
+
+    /// Runs the placement for `due` on a kept grid and checks it by brute force; returns the
+    /// rows placed.
+    std::size_t check(const char* name, const std::vector<Index>& due) const {
+        Fixture g(fluid, box, r);  // positions at the build, the grid kept with its drift
+        World& w = g.w;
+        const std::size_t n = w.fluid.size();
+        const Real h = w.physics.h;
+        w.fluid_grid.set_drift(drift);
+        w.active_set = due;
+        run_system(DriftSystem(DriftSystem::Rows::AroundDue), w);
+        const auto x = w.fluid.store.get(comp::position);
+        std::vector<std::uint8_t> placed(n, 0);
+        for (Index i : w.placed) {
+            EXPECT_EQ(placed[i], 0) << name << ": row " << i << " listed twice";
+            placed[i] = 1;
+        }
+        std::size_t reached = 0;
+        int bad = 0;
+        for (std::size_t j = 0; j < n && bad < 5; ++j) {
+            bool near = false;
+            for (Index i : due) near |= (base.x0[j] - xe[i]).cwiseAbs().maxCoeff() < h + drift;
+            reached += near;
+            if (near && !placed[j]) {
+                ADD_FAILURE() << name << ": row " << j << " within reach of a due row not placed";
+                ++bad;
+            }
+            if (placed[j] ? x[j] != xe[j] : x[j] != base.x0[j]) {
+                ADD_FAILURE() << name << ": row " << j << (placed[j] ? " placed with other bits" : " written but not listed");
+                ++bad;
+            }
+        }
+        std::printf("%s: %zu due rows, %zu rows within reach, %zu placed (%.1f %% of %zu)\n", name, due.size(), reached,
+                    w.placed.size(), 100.0 * double(w.placed.size()) / double(n), n);
+        // A grid built this step: nothing placed here.
+        Fixture b(fluid, box, r);
+        b.w.active_set = due;
+        run_system(DriftSystem(DriftSystem::Rows::AroundDue), b.w);
+        EXPECT_TRUE(b.w.placed.empty()) << name;
+        EXPECT_TRUE(std::equal(base.x0.begin(), base.x0.end(), b.w.fluid.store.get(comp::position).begin())) << name;
+        return w.placed.size();
+    }
+};
+
+}  // namespace
+
+// At one due row and a cluster of eight (cell by cell, one task: under 1/16 of the rows and
+// under kParallelRows) and at 60 scattered due rows (their cells reach more: every row, streamed).
 TEST(Drift, AroundDuePlacesWhatAKeptGridsSearchReads) {
-    Fixture f, eager;
+    const Around a(Vec3d(0.4, 0.2, 0.15), Vec3d(0.5, 0.3, 0.2), 0.005);
+    const Fixture& f = a.base;
     const std::size_t n = f.w.fluid.size();
-    run_system(DriftSystem(), eager.w);
-    const auto xe = eager.w.fluid.store.get(comp::position);
-    double d = 0;
-    for (std::size_t i = 0; i < n; ++i) d = std::max(d, (xe[i] - f.x0[i]).cast<double>().norm());
-    const Real h = f.w.physics.h;
-    ASSERT_LT(d, 0.25 * h);
-    ASSERT_GT(d, 0.05 * h);
-    const Real drift = Real(d * 1.001);
     // A cluster: the rows of the cell of row n/2, up to eight.
     std::vector<Index> cluster;
     const std::int64_t c = f.w.fluid_grid.cell_of(f.x0[n / 2]);
@@ -209,51 +271,36 @@ TEST(Drift, AroundDuePlacesWhatAKeptGridsSearchReads) {
     std::sort(cluster.begin(), cluster.end());
     std::vector<Index> scattered;
     for (std::size_t i = 0; i < 60; ++i) scattered.push_back(Index(i * (n / 60)));
-    struct Case {
-        const char* name;
-        std::vector<Index> due;
-        bool partial;
-    };
-    for (const Case& k : {Case{"one row", {Index(n / 3)}, true}, Case{"a cluster", cluster, true},
-                          Case{"60 scattered", scattered, false}}) {
-        Fixture g;  // positions at the build, the grid kept with its drift
-        World& w = g.w;
-        w.fluid_grid.set_drift(drift);
-        w.active_set = k.due;
-        DriftSystem sys(DriftSystem::Rows::AroundDue);
-        run_system(sys, w);
-        const auto x = w.fluid.store.get(comp::position);
-        std::vector<std::uint8_t> placed(n, 0);
-        for (Index i : w.placed) {
-            ASSERT_EQ(placed[i], 0) << k.name << ": row " << i << " listed twice";
-            placed[i] = 1;
-        }
-        std::size_t reached = 0;
-        for (std::size_t j = 0; j < n; ++j) {
-            bool near = false;
-            for (Index i : k.due) near |= (f.x0[j] - xe[i]).cwiseAbs().maxCoeff() < h + drift;
-            reached += near;
-            if (near) {
-                ASSERT_TRUE(placed[j]) << k.name << ": row " << j << " within reach of a due row not placed";
-            }
-            if (placed[j]) {
-                ASSERT_EQ(x[j], xe[j]) << k.name << ": row " << j;
-            } else {
-                ASSERT_EQ(x[j], f.x0[j]) << k.name << ": row " << j << " written but not listed";
-            }
-        }
-        std::printf("%s: %zu due rows, %zu rows within reach, %zu placed (%.1f %% of %zu)\n", k.name, k.due.size(),
-                    reached, w.placed.size(), 100.0 * double(w.placed.size()) / double(n), n);
-        if (k.partial) {
-            EXPECT_LT(double(w.placed.size()), DriftSystem::kStreamShare * double(n)) << k.name;
-        } else {
-            EXPECT_EQ(w.placed.size(), n) << k.name;
-        }
-        // A grid built this step: nothing placed here.
-        Fixture b;
-        b.w.active_set = k.due;
-        run_system(DriftSystem(DriftSystem::Rows::AroundDue), b.w);
-        EXPECT_TRUE(b.w.placed.empty());
-        EXPECT_TRUE(std::equal(f.x0.begin(), f.x0.end(), b.w.fluid.store.get(comp::position).begin()));
+    for (const auto& [name, due] : {std::pair<const char*, std::vector<Index>>{"one row", {Index(n / 3)}},
+                                    {"a cluster", cluster}}) {
+        const std::size_t placed = a.check(name, due);
+        EXPECT_LT(double(placed), DriftSystem::kStreamShare * double(n)) << name;
+        EXPECT_LT(placed, DriftSystem::kParallelRows) << name;
     }
+    EXPECT_EQ(a.check("60 scattered", scattered), n);
+}
+
+// The parallel placement (kParallelRows or more rows placed, under 1/16 of them): 64 due rows on
+// a 4 x 4 x 4 lattice 2 h apart in a block of 192,000 rows (r = 2.5 mm), whose reach covers about
+// 1,000 cells. The tasks claim disjoint cells, so a row placed twice or an entry of res::placed
+// left unwritten fails the brute-force check (and the race would show under ThreadSanitizer).
+TEST(Drift, AroundDuePlacesManyCellsInParallel) {
+    const Around a(Vec3d(0.4, 0.3, 0.2), Vec3d(0.45, 0.35, 0.25), 0.0025);
+    const Fixture& f = a.base;
+    const std::size_t n = f.w.fluid.size();
+    const Real h = f.w.physics.h;
+    std::vector<Index> due;
+    for (int i = 0; i < 4; ++i)
+        for (int j = 0; j < 4; ++j)
+            for (int k = 0; k < 4; ++k) {
+                const Vec3 target = Vec3(0.2f, 0.15f, 0.1f) + Real(2) * h * Vec3(Real(i - 2), Real(j - 2), Real(k - 2));
+                std::size_t best = 0;
+                for (std::size_t q = 1; q < n; ++q)
+                    if ((f.x0[q] - target).squaredNorm() < (f.x0[best] - target).squaredNorm()) best = q;
+                due.push_back(Index(best));
+            }
+    std::sort(due.begin(), due.end());
+    const std::size_t placed = a.check("a 4 x 4 x 4 lattice", due);
+    EXPECT_GE(placed, DriftSystem::kParallelRows);
+    EXPECT_LT(double(placed), DriftSystem::kStreamShare * double(n));
 }
