@@ -11,6 +11,7 @@
 #include <atomic>
 #include <limits>
 
+#include "engine/core/grid.hpp"
 #include "engine/data/components.hpp"
 #include "engine/data/world.hpp"
 #include "engine/graph/context.hpp"
@@ -20,9 +21,9 @@ namespace sph {
 
 Access BinnedStepSystem::access() const {
     return Access()
-        .read(res::active_set, res::fluid_neighbours, fluid(comp::dt_raw), fluid(comp::active))
+        .read(res::active_set, res::fluid_neighbours, res::fluid_grid, fluid(comp::dt_raw), fluid(comp::active))
         .write(fluid(comp::bin), fluid(comp::ti_end), fluid(comp::dt), res::bin_timeline, res::due_buckets,
-               res::dt, res::drift_bound, counter::woken, counter::limiter_passes);
+               res::dt, res::drift_bound, counter::woken, counter::limiter_passes, counter::limiter_rows);
 }
 
 void BinnedStepSystem::register_components(World& w) {
@@ -47,6 +48,95 @@ bool atomic_lower(std::uint8_t& target, std::uint8_t v) {
     return false;
 }
 
+/// Per cell of `grid`: the smallest bin of its rows (255 when empty).
+void cell_lows(const UniformGrid& grid, std::span<const std::uint8_t> bin, std::vector<std::uint8_t>& lo) {
+    lo.resize(grid.cell_count());
+    const auto slots = grid.sorted_index();
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, lo.size(), 4096), [&](const auto& r) {
+        Index s = grid.cell_start(std::int64_t(r.begin()));
+        for (std::size_t c = r.begin(); c < r.end(); ++c) {
+            const Index e = grid.cell_start(std::int64_t(c + 1));
+            std::uint8_t l = 255;
+            for (; s < e; ++s) l = std::min(l, bin[slots[s]]);
+            lo[c] = l;
+        }
+    });
+}
+
+/// The rows whose bin exceeds the smallest in the 27 cells around their own by more than 2 (every
+/// row within a fresh grid's search of a row lies in those cells), into `rows`.
+void rows_above_cell_lows(const UniformGrid& grid, std::span<const std::uint8_t> bin, const std::vector<std::uint8_t>& lo,
+                          std::vector<Index>& rows) {
+    const Eigen::Vector3i d = grid.dims();
+    const auto slots = grid.sorted_index();
+    tbb::enumerable_thread_specific<std::vector<Index>> found;
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, grid.cell_count(), 4096), [&](const auto& r) {
+        auto& out = found.local();
+        for (std::size_t c = r.begin(); c < r.end(); ++c) {
+            const Index b = grid.cell_start(std::int64_t(c)), e = grid.cell_start(std::int64_t(c + 1));
+            if (b == e) continue;
+            const int x = int(c % std::size_t(d[0])), y = int(c / std::size_t(d[0]) % std::size_t(d[1])),
+                      z = int(c / (std::size_t(d[0]) * std::size_t(d[1])));
+            const int x0 = std::max(x - 1, 0), x1 = std::min(x + 1, d[0] - 1);
+            int l = 255;
+            for (int cz = std::max(z - 1, 0); cz <= std::min(z + 1, d[2] - 1); ++cz)
+                for (int cy = std::max(y - 1, 0); cy <= std::min(y + 1, d[1] - 1); ++cy) {
+                    const std::size_t row = std::size_t(grid.cell_index({0, cy, cz}));
+                    for (std::size_t k = row + std::size_t(x0); k <= row + std::size_t(x1); ++k) l = std::min<int>(l, lo[k]);
+                }
+            for (Index k = b; k < e; ++k)
+                if (bin[slots[k]] > l + 2) out.push_back(slots[k]);
+        }
+    });
+    rows.clear();
+    for (auto& v : found) rows.insert(rows.end(), v.begin(), v.end());
+}
+
+/// Per cell of `grid`: the largest bin of its rows (0 when empty).
+void cell_highs(const UniformGrid& grid, std::span<const std::uint8_t> bin, std::vector<std::uint8_t>& hi) {
+    hi.resize(grid.cell_count());
+    const auto slots = grid.sorted_index();
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, hi.size(), 4096), [&](const auto& r) {
+        Index s = grid.cell_start(std::int64_t(r.begin()));
+        for (std::size_t c = r.begin(); c < r.end(); ++c) {
+            const Index e = grid.cell_start(std::int64_t(c + 1));
+            std::uint8_t h = 0;
+            for (; s < e; ++s) h = std::max(h, bin[slots[s]]);
+            hi[c] = h;
+        }
+    });
+}
+
+/// The active rows whose bin lies more than 2 below the largest in the 27 cells around their own,
+/// into `rows`: the only rows with a neighbour the wake-up may lower.
+void active_rows_below_cell_highs(const UniformGrid& grid, std::span<const std::uint8_t> bin,
+                                  std::span<const std::uint8_t> active, const std::vector<std::uint8_t>& hi,
+                                  std::vector<Index>& rows) {
+    const Eigen::Vector3i d = grid.dims();
+    const auto slots = grid.sorted_index();
+    tbb::enumerable_thread_specific<std::vector<Index>> found;
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, grid.cell_count(), 4096), [&](const auto& r) {
+        auto& out = found.local();
+        for (std::size_t c = r.begin(); c < r.end(); ++c) {
+            const Index b = grid.cell_start(std::int64_t(c)), e = grid.cell_start(std::int64_t(c + 1));
+            if (b == e) continue;
+            const int x = int(c % std::size_t(d[0])), y = int(c / std::size_t(d[0]) % std::size_t(d[1])),
+                      z = int(c / (std::size_t(d[0]) * std::size_t(d[1])));
+            const int x0 = std::max(x - 1, 0), x1 = std::min(x + 1, d[0] - 1);
+            int h = 0;
+            for (int cz = std::max(z - 1, 0); cz <= std::min(z + 1, d[2] - 1); ++cz)
+                for (int cy = std::max(y - 1, 0); cy <= std::min(y + 1, d[1] - 1); ++cy) {
+                    const std::size_t row = std::size_t(grid.cell_index({0, cy, cz}));
+                    for (std::size_t k = row + std::size_t(x0); k <= row + std::size_t(x1); ++k) h = std::max<int>(h, hi[k]);
+                }
+            for (Index k = b; k < e; ++k)
+                if (active[slots[k]] && bin[slots[k]] + 2 < h) out.push_back(slots[k]);
+        }
+    });
+    rows.clear();
+    for (auto& v : found) rows.insert(rows.end(), v.begin(), v.end());
+}
+
 }  // namespace
 
 void BinnedStepSystem::run(Context& ctx) {
@@ -60,7 +150,7 @@ void BinnedStepSystem::run(Context& ctx) {
     BinTimeline& tl = ctx.write(res::bin_timeline);
     DueBuckets& buckets = ctx.write(res::due_buckets);
     StepSize& s = ctx.write(res::dt);
-    std::uint64_t woken_count = 0, passes = 0;
+    std::uint64_t woken_count = 0, passes = 0, visited = 0;
     double raw_hi = 0;  // the longest Delta t_i^raw of the step
     if (!set.empty()) {
         // The stable step of this step: the shortest Delta t_i^raw evaluated (checked against
@@ -120,6 +210,20 @@ void BinnedStepSystem::run(Context& ctx) {
         // bounds every new bin) instead of pulling at every row above lo + 2.
         const bool dense = set.size() == bin.size();
         const int hi_raw = dense ? tl.bin_for(raw_hi) : 0;
+        // A grid built this step from every row (no drift) places each row in its cell, and every
+        // list entry of a row lies in the 27 cells around it: the smallest and largest bin of those
+        // cells bound its neighbours' bins, so only a row more than 2 above the smallest can break
+        // the limiter's rule and only one more than 2 below the largest can have a neighbour to
+        // wake. On such steps (with at most kCellsPerRow cells a row) the rows to visit are found
+        // by two passes over the cells instead of from the bounds on all bins, which at He's
+        // lambda let nearly every row through: with every row due the limiter's, and with
+        // kWakeByCellsShare of the rows or more the wake-up's (below it the passes cost more than
+        // the list reads they spare: docs/results/benchmarks.md).
+        const UniformGrid& grid = ctx.read(res::fluid_grid);
+        const bool fresh = grid.drift() == 0 && grid.particle_count() == bin.size() &&
+                           double(grid.cell_count()) <= kCellsPerRow * double(bin.size());
+        const bool by_cells = dense && fresh;
+        const bool wake_by_cells = !dense && fresh && double(set.size()) >= kWakeByCellsShare * double(bin.size());
         tbb::enumerable_thread_specific<std::vector<Index>> limit_rows, wake_rows;
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, set.size(), kGrain), [&](const auto& r) {
             auto& lim = limit_rows.local();
@@ -133,12 +237,12 @@ void BinnedStepSystem::run(Context& ctx) {
                 }
                 bin[i] = std::uint8_t(b);
                 if (dense) {
-                    if (b + 2 < hi_raw) lim.push_back(i);
+                    if (!by_cells && b + 2 < hi_raw) lim.push_back(i);
                     continue;
                 }
                 const bool limited = b > lo + 2;
                 if (limited) lim.push_back(i);
-                if (limited || b + 2 < hi) wak.push_back(i);
+                if (!wake_by_cells && (limited || b + 2 < hi)) wak.push_back(i);
             }
         });
         m_limit.clear();
@@ -151,6 +255,7 @@ void BinnedStepSystem::run(Context& ctx) {
             bool any_change = false;
             while (!m_limit.empty()) {
                 ++passes;
+                visited += m_limit.size();
                 const bool changed = tbb::parallel_reduce(
                     tbb::blocked_range<std::size_t>(0, m_limit.size(), kGrain), false,
                     [&](const auto& r, bool any) {
@@ -171,6 +276,7 @@ void BinnedStepSystem::run(Context& ctx) {
         };
         // One wake-up pass; true when it lowered a sleeping bin.
         auto wake = [&] {
+            visited += m_wake.size();
             return !m_wake.empty() && tbb::parallel_reduce(
                 tbb::blocked_range<std::size_t>(0, m_wake.size(), kGrain), false,
                 [&](const auto& r, bool any) {
@@ -198,6 +304,7 @@ void BinnedStepSystem::run(Context& ctx) {
             tbb::enumerable_thread_specific<std::vector<Index>> lowered;
             while (!m_limit.empty()) {
                 ++passes;
+                visited += m_limit.size();
                 for (auto& v : lowered) v.clear();
                 tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m_limit.size(), kGrain), [&](const auto& r) {
                     auto& out = lowered.local();
@@ -214,11 +321,36 @@ void BinnedStepSystem::run(Context& ctx) {
         };
         // Otherwise: wake-up leaves the active bins as they are, so after it only a limiter pass
         // that changes an active bin (bounded by a newly lowered sleeping one) calls for another.
-        if (dense) {
+        if (by_cells) {
+            // Pulled at the rows above their cells' lower bound + 2: bin_i = min(bin_i, bin_j + 2)
+            // over i's list, at the bins of the moment; a row lowered here pushes below, so every
+            // pair ends within 2 bins (the bounds need not hold once bins fall: what falls pushes).
+            cell_lows(grid, bin, m_cell_lo);
+            rows_above_cell_lows(grid, bin, m_cell_lo, m_pull);
+            tbb::enumerable_thread_specific<std::vector<Index>> lowered;
+            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m_pull.size(), kGrain), [&](const auto& r) {
+                auto& out = lowered.local();
+                for (std::size_t k = r.begin(); k < r.end(); ++k) {
+                    const Index i = m_pull[k];
+                    int low = std::atomic_ref<std::uint8_t>(bin[i]).load(std::memory_order_relaxed);
+                    for (Index j : lists.of(i))
+                        low = std::min<int>(low, std::atomic_ref<std::uint8_t>(bin[j]).load(std::memory_order_relaxed) + 2);
+                    if (atomic_lower(bin[i], std::uint8_t(low)) && low + 2 < hi_raw) out.push_back(i);
+                }
+            });
+            if (!m_pull.empty()) ++passes;
+            visited += m_pull.size();
+            m_limit.clear();
+            for (auto& v : lowered) m_limit.insert(m_limit.end(), v.begin(), v.end());
+            push_limit();
+        } else if (dense) {
             push_limit();
         } else {
+            if (wake_by_cells) cell_highs(grid, bin, m_cell_hi);  // an upper bound from here on: bins only fall
             limit();
-            while (wake() && limit()) {
+            for (;;) {
+                if (wake_by_cells) active_rows_below_cell_highs(grid, bin, active, m_cell_hi, m_wake);
+                if (!wake() || !limit()) break;
             }
         }
         // 4. New ends. Active particles: a whole step of their bin from now, filed by bin (at
@@ -275,6 +407,7 @@ void BinnedStepSystem::run(Context& ctx) {
     s.set_clipped(2 * to_seconds(ticks), ticks, ctx.clock());
     ctx.write(counter::woken) = woken_count;
     ctx.write(counter::limiter_passes) = passes;
+    ctx.write(counter::limiter_rows) = visited;
 }
 
 }  // namespace sph

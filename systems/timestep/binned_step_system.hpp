@@ -27,9 +27,14 @@
 
 #include "engine/core/timeline.hpp"
 #include "engine/core/types.hpp"
+#include "engine/data/world.hpp"
 #include "engine/graph/system.hpp"
 
 namespace sph {
+
+namespace counter {
+inline constexpr Counter limiter_rows{"limiter_rows"};  ///< rows whose lists the limiter and the wake-up read
+}  // namespace counter
 
 class BinnedStepSystem final : public System {
 public:
@@ -42,6 +47,11 @@ public:
     BinnedStepSystem(double dt_min, double dt_max, double headroom = kHeadroom)
         : m_dt_min(dt_min), m_dt_max(dt_max), m_headroom(headroom) {}
     static constexpr double kHeadroom = 0.8;
+    /// On a step whose grid was built from every row, with at most this many cells a row, the rows
+    /// the limiter pulls at (every row due) are found by grid cell (binned_step_system.cpp) ...
+    static constexpr double kCellsPerRow = 8;
+    /// ... and the wake-up's rows, on a step with at least this share of the rows due.
+    static constexpr double kWakeByCellsShare = 0.5;
     std::string name() const override { return "binned_step"; }
     Access access() const override;
     void register_components(World& w) override;
@@ -56,6 +66,8 @@ private:
     double m_dt_min, m_dt_max, m_headroom;
     tbb::enumerable_thread_specific<Filed> m_filed;
     std::vector<Index> m_limit, m_wake;           ///< active rows the limiter / wake-up must visit
+    std::vector<Index> m_pull;                    ///< every row due: the rows the limiter pulls at
+    std::vector<std::uint8_t> m_cell_lo, m_cell_hi;  ///< per grid cell: the smallest / largest bin of its rows
 };
 
 }  // namespace sph
