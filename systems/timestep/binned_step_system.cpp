@@ -48,25 +48,29 @@ bool atomic_lower(std::uint8_t& target, std::uint8_t v) {
     return false;
 }
 
-/// Per cell of `grid`: the smallest bin of its rows (255 when empty).
-void cell_lows(const UniformGrid& grid, std::span<const std::uint8_t> bin, std::vector<std::uint8_t>& lo) {
-    lo.resize(grid.cell_count());
+/// Per cell of `grid`: the bins of its rows folded by `fold` from `init` (init when empty): the
+/// smallest with std::min and 255, the largest with std::max and 0.
+template <class Fold>
+void cell_bounds(const UniformGrid& grid, std::span<const std::uint8_t> bin, std::uint8_t init, Fold fold,
+                 std::vector<std::uint8_t>& out) {
+    out.resize(grid.cell_count());
     const auto slots = grid.sorted_index();
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, lo.size(), 4096), [&](const auto& r) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, out.size(), 4096), [&](const auto& r) {
         Index s = grid.cell_start(std::int64_t(r.begin()));
         for (std::size_t c = r.begin(); c < r.end(); ++c) {
             const Index e = grid.cell_start(std::int64_t(c + 1));
-            std::uint8_t l = 255;
-            for (; s < e; ++s) l = std::min(l, bin[slots[s]]);
-            lo[c] = l;
+            std::uint8_t v = init;
+            for (; s < e; ++s) v = fold(v, bin[slots[s]]);
+            out[c] = v;
         }
     });
 }
 
-/// The rows whose bin exceeds the smallest in the 27 cells around their own by more than 2 (every
-/// row within a fresh grid's search of a row lies in those cells), into `rows`.
-void rows_above_cell_lows(const UniformGrid& grid, std::span<const std::uint8_t> bin, const std::vector<std::uint8_t>& lo,
-                          std::vector<Index>& rows) {
+/// The rows i with keep(i, B) into `rows`, B the cell bounds folded over the 27 cells around i's
+/// (every row within a fresh grid's search of i lies in them).
+template <class Fold, class Keep>
+void rows_by_cell(const UniformGrid& grid, const std::vector<std::uint8_t>& bounds, std::uint8_t init, Fold fold,
+                  Keep keep, std::vector<Index>& rows) {
     const Eigen::Vector3i d = grid.dims();
     const auto slots = grid.sorted_index();
     tbb::enumerable_thread_specific<std::vector<Index>> found;
@@ -78,64 +82,22 @@ void rows_above_cell_lows(const UniformGrid& grid, std::span<const std::uint8_t>
             const int x = int(c % std::size_t(d[0])), y = int(c / std::size_t(d[0]) % std::size_t(d[1])),
                       z = int(c / (std::size_t(d[0]) * std::size_t(d[1])));
             const int x0 = std::max(x - 1, 0), x1 = std::min(x + 1, d[0] - 1);
-            int l = 255;
+            std::uint8_t v = init;
             for (int cz = std::max(z - 1, 0); cz <= std::min(z + 1, d[2] - 1); ++cz)
                 for (int cy = std::max(y - 1, 0); cy <= std::min(y + 1, d[1] - 1); ++cy) {
                     const std::size_t row = std::size_t(grid.cell_index({0, cy, cz}));
-                    for (std::size_t k = row + std::size_t(x0); k <= row + std::size_t(x1); ++k) l = std::min<int>(l, lo[k]);
+                    for (std::size_t k = row + std::size_t(x0); k <= row + std::size_t(x1); ++k) v = fold(v, bounds[k]);
                 }
             for (Index k = b; k < e; ++k)
-                if (bin[slots[k]] > l + 2) out.push_back(slots[k]);
+                if (keep(slots[k], int(v))) out.push_back(slots[k]);
         }
     });
     rows.clear();
     for (auto& v : found) rows.insert(rows.end(), v.begin(), v.end());
 }
 
-/// Per cell of `grid`: the largest bin of its rows (0 when empty).
-void cell_highs(const UniformGrid& grid, std::span<const std::uint8_t> bin, std::vector<std::uint8_t>& hi) {
-    hi.resize(grid.cell_count());
-    const auto slots = grid.sorted_index();
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, hi.size(), 4096), [&](const auto& r) {
-        Index s = grid.cell_start(std::int64_t(r.begin()));
-        for (std::size_t c = r.begin(); c < r.end(); ++c) {
-            const Index e = grid.cell_start(std::int64_t(c + 1));
-            std::uint8_t h = 0;
-            for (; s < e; ++s) h = std::max(h, bin[slots[s]]);
-            hi[c] = h;
-        }
-    });
-}
-
-/// The active rows whose bin lies more than 2 below the largest in the 27 cells around their own,
-/// into `rows`: the only rows with a neighbour the wake-up may lower.
-void active_rows_below_cell_highs(const UniformGrid& grid, std::span<const std::uint8_t> bin,
-                                  std::span<const std::uint8_t> active, const std::vector<std::uint8_t>& hi,
-                                  std::vector<Index>& rows) {
-    const Eigen::Vector3i d = grid.dims();
-    const auto slots = grid.sorted_index();
-    tbb::enumerable_thread_specific<std::vector<Index>> found;
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, grid.cell_count(), 4096), [&](const auto& r) {
-        auto& out = found.local();
-        for (std::size_t c = r.begin(); c < r.end(); ++c) {
-            const Index b = grid.cell_start(std::int64_t(c)), e = grid.cell_start(std::int64_t(c + 1));
-            if (b == e) continue;
-            const int x = int(c % std::size_t(d[0])), y = int(c / std::size_t(d[0]) % std::size_t(d[1])),
-                      z = int(c / (std::size_t(d[0]) * std::size_t(d[1])));
-            const int x0 = std::max(x - 1, 0), x1 = std::min(x + 1, d[0] - 1);
-            int h = 0;
-            for (int cz = std::max(z - 1, 0); cz <= std::min(z + 1, d[2] - 1); ++cz)
-                for (int cy = std::max(y - 1, 0); cy <= std::min(y + 1, d[1] - 1); ++cy) {
-                    const std::size_t row = std::size_t(grid.cell_index({0, cy, cz}));
-                    for (std::size_t k = row + std::size_t(x0); k <= row + std::size_t(x1); ++k) h = std::max<int>(h, hi[k]);
-                }
-            for (Index k = b; k < e; ++k)
-                if (active[slots[k]] && bin[slots[k]] + 2 < h) out.push_back(slots[k]);
-        }
-    });
-    rows.clear();
-    for (auto& v : found) rows.insert(rows.end(), v.begin(), v.end());
-}
+constexpr auto kMin = [](std::uint8_t a, std::uint8_t b) { return std::min(a, b); };
+constexpr auto kMax = [](std::uint8_t a, std::uint8_t b) { return std::max(a, b); };
 
 }  // namespace
 
@@ -325,8 +287,8 @@ void BinnedStepSystem::run(Context& ctx) {
             // Pulled at the rows above their cells' lower bound + 2: bin_i = min(bin_i, bin_j + 2)
             // over i's list, at the bins of the moment; a row lowered here pushes below, so every
             // pair ends within 2 bins (the bounds need not hold once bins fall: what falls pushes).
-            cell_lows(grid, bin, m_cell_lo);
-            rows_above_cell_lows(grid, bin, m_cell_lo, m_pull);
+            cell_bounds(grid, bin, 255, kMin, m_cell_lo);
+            rows_by_cell(grid, m_cell_lo, 255, kMin, [&](Index i, int low) { return bin[i] > low + 2; }, m_pull);
             tbb::enumerable_thread_specific<std::vector<Index>> lowered;
             tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m_pull.size(), kGrain), [&](const auto& r) {
                 auto& out = lowered.local();
@@ -346,10 +308,12 @@ void BinnedStepSystem::run(Context& ctx) {
         } else if (dense) {
             push_limit();
         } else {
-            if (wake_by_cells) cell_highs(grid, bin, m_cell_hi);  // an upper bound from here on: bins only fall
+            if (wake_by_cells) cell_bounds(grid, bin, 0, kMax, m_cell_hi);  // an upper bound from here on: bins only fall
             limit();
             for (;;) {
-                if (wake_by_cells) active_rows_below_cell_highs(grid, bin, active, m_cell_hi, m_wake);
+                if (wake_by_cells)  // the only active rows with a neighbour the wake-up may lower
+                    rows_by_cell(grid, m_cell_hi, 0, kMax, [&](Index i, int high) { return active[i] && bin[i] + 2 < high; },
+                                 m_wake);
                 if (!wake() || !limit()) break;
             }
         }
