@@ -8,7 +8,6 @@
 #include "engine/data/components.hpp"
 #include "engine/data/world.hpp"
 #include "engine/graph/context.hpp"
-#include "systems/active/select_active_system.hpp"
 #include "systems/timestep/binned_state.hpp"
 
 namespace sph {
@@ -37,8 +36,6 @@ void sort_runs(std::vector<Index>& v) {
 
 Access BinnedSelectSystem::access() const {
     return Access()
-        .read(fluid(comp::dt))
-        .read_if(m_moving, fluid(comp::position), res::moving_bodies)
         .write(fluid(comp::bin), fluid(comp::ti_end), fluid(comp::active), res::bin_timeline, res::due_buckets,
                res::active_set, counter::active);
 }
@@ -102,23 +99,6 @@ void BinnedSelectSystem::run(Context& ctx) {
                     set.push_back(i);
                 }
             buckets.due.erase(it);
-        }
-        if (m_moving && !ctx.read(res::moving_bodies).empty()) {
-            const auto& bodies = ctx.read(res::moving_bodies);
-            // Within reach of a moving body: due now (its step so far ends here), on the largest
-            // bin `now` allows. Its entry at the old end goes stale.
-            const auto x = ctx.read(fluid(comp::position));
-            const auto dt = ctx.read(fluid(comp::dt));
-            const Real h = ctx.physics().h;
-            const int top = BinTimeline::largest_aligned_bin(tl.now, tl.max_bin);
-            for (std::size_t i = 0; i < n; ++i) {
-                if (active[i] || !near_moving_body(bodies, x[i], dt[i], h)) continue;
-                ti_end[i] = tl.now;
-                bin[i] = std::uint8_t(std::min<int>(bin[i], top));
-                buckets.bin_lo = std::min<int>(buckets.bin_lo, bin[i]);
-                active[i] = 1;
-                set.push_back(Index(i));
-            }
         }
         // Each row is in the set once, so a set of n rows is every row: 0..n-1 without the merge.
         if (set.size() == n)

@@ -1,5 +1,6 @@
 #include "systems/methods/wcsph.hpp"
 
+#include "systems/active/binned_body_system.hpp"
 #include "systems/active/binned_select_system.hpp"
 #include "systems/active/select_active_system.hpp"
 #include "systems/boundary/boundary_collision_system.hpp"
@@ -47,12 +48,14 @@ Recipe make_wcsph_recipe(const Scene& scene) {
     const bool extrapolated = boundary && wall_pressure(scene) == WallPressure::Extrapolated;
     // binned: the lazy drift (systems/integrate/drift_system.hpp). Positions are placed lazily
     // (the grid's build places every row, a kept grid's step the rows around the due ones)
-    // unless something reads positions beyond the due rows' reach: a moving body's wake-up test,
-    // the extrapolated walls' gather, a grid built every step. Then every row's position at the
-    // step's time, before anything reads one.
-    const bool lazy_positions = binned && stepping.keep_grid && !moving && !extrapolated;
+    // unless something reads positions beyond the due rows' reach: the extrapolated walls'
+    // gather, a grid built every step. Then every row's position at the step's time, before
+    // anything reads one. (A moving body's wake-up computes its candidates' positions itself.)
+    const bool lazy_positions = binned && stepping.keep_grid && !extrapolated;
     if (binned && !lazy_positions) r.step.push_back(std::make_unique<DriftSystem>());
-    if (binned) r.step.push_back(std::make_unique<BinnedSelectSystem>(stepping.dt_min, stepping.dt_max, moving));
+    if (binned) r.step.push_back(std::make_unique<BinnedSelectSystem>(stepping.dt_min, stepping.dt_max));
+    // binned: the rows within a moving body's reach made due, from a list of candidates.
+    if (binned && moving) r.step.push_back(std::make_unique<BinnedBodySystem>(stepping));
     // binned: the grid kept while the due rows are few and no row can have moved far.
     r.step.push_back(binned && stepping.keep_grid ? std::make_unique<FluidGridSystem>(stepping, lazy_positions)
                                                   : std::make_unique<FluidGridSystem>());

@@ -58,6 +58,10 @@ struct DriftBound {
     /// into it, so a netted row keeps the speed bound above and, re-based where the net put it
     /// (BinnedWakeSystem), drifts on from there: a kept grid adds the jumps to its drift.
     double net_shift = 0;
+    /// The largest jump among the rows the net moved without a moving body's hit. A row a moving
+    /// body netted ends on its surface, within the body's reach, where BinnedBodySystem's
+    /// candidates already include it, so the candidates need only this one.
+    double net_shift_static = 0;
     /// The speed bound in m/s (infinity before the first reset).
     double speed(double lambda_v, double lambda_f, double h) const {
         if (!(shortest_raw > 0) || shortest_raw == std::numeric_limits<double>::infinity())

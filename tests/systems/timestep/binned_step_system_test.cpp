@@ -8,12 +8,17 @@
 
 #include <cmath>
 #include <numeric>
+#include <random>
 
 #include "engine/data/components.hpp"
 #include "engine/data/world.hpp"
 #include "engine/data/world_init.hpp"
 #include "engine/graph/system.hpp"
+#include "systems/active/binned_body_system.hpp"
 #include "systems/active/binned_select_system.hpp"
+#include "systems/active/select_active_system.hpp"
+#include "systems/integrate/drift.hpp"
+#include "systems/integrate/drift_system.hpp"
 #include "systems/neighbours/fluid_grid_system.hpp"
 #include "systems/neighbours/fluid_neighbours_system.hpp"
 #include "systems/timestep/binned_state.hpp"
@@ -131,4 +136,110 @@ TEST(BinnedStepSystem, EveryRowDueVisitsOnlyTheRowsNearABinEdgeByCell) {
     EXPECT_EQ(pushed.rings, 2);
     EXPECT_GE(pushed.visited, 3000u);
     EXPECT_LT(cells.visited, 600u);  // up to three layers of cells (200 rows a layer)
+}
+
+// BinnedBodySystem (systems/active/binned_body_system.hpp) against a scan of every row: a 4 x 16
+// x 4 cm box moving at +0.5 m/s in x through a 0.4 m pool of 5,760 rows that drift towards it on
+// random base states (v_last = -0.4 m/s in x give or take 0.05, |a| <= 1 m/s^2, so |v| <= 0.5 m/s
+// over the 40 ms: the box and the rows close at 0.9 m/s), 16 due steps
+// 2.5 ms apart with 5 % of the rows due and random bins. At each, the active set must equal,
+// row for row, the due rows plus every row whose position at the step's time (drift.hpp, the
+// bits the drift writes) lies within h + speed dt_i of the box (near_moving_body), brute force
+// over all rows. The declared drift bound (DriftBound: 0.5 m/s) is what lets the system reuse
+// its candidate list between steps; rows drift into the reach during its life (counted), and a
+// list kept on the box's own motion only (without the rows' drift) misses some at step 11.
+TEST(BinnedBodySystem, AddsExactlyTheRowsWithinReachOfAMovingBody) {
+    Scene s = test::tank_scene(Vec3d(0.4, 0.12, 0.12), Vec3d(0.4, 0.25, 0.12), 0.005);
+    s.simulation.stepping.mode = SteppingMode::Binned;
+    BoundaryDesc box;
+    box.shape = BoundaryShape::Box;
+    box.box = Aabb{Vec3d(0.10, 0.04, 0.03), Vec3d(0.14, 0.20, 0.07)};
+    box.motion = linear_motion(Vec3d(0.5, 0, 0));
+    s.boundaries.push_back(box);
+    World w;
+    initialise_world(w, s);
+    test::jitter(w, 3, 0.3f);
+    const SteppingParams& st = w.scene.simulation.stepping;
+    BinnedSelectSystem select(st.dt_min, st.dt_max);
+    BinnedBodySystem body(st);
+    DriftSystem().register_components(w);
+    select.register_components(w);
+    body.register_components(w);
+    const std::size_t n = w.fluid.size();
+    ASSERT_EQ(w.moving_bodies.size(), 1u);
+    const Aabb start = w.moving_bodies[0].bounds;
+    auto& store = w.fluid.store;
+    const auto x0 = store.get(comp::position_last);
+    const auto v0 = store.get(comp::velocity_last);
+    const auto a = store.get(comp::acceleration);
+    const auto t_last = store.get(comp::t_last);
+    std::mt19937 rng(17);
+    std::uniform_real_distribution<Real> u(-1, 1);
+    for (std::size_t i = 0; i < n; ++i) {
+        Vec3 vi(u(rng), u(rng), u(rng)), ai(u(rng), u(rng), u(rng));
+        v0[i] = Vec3(-0.4f, 0, 0) + Real(0.05) * vi.normalized() * std::abs(u(rng));  // against the box
+        a[i] = Real(1) * ai.normalized() * std::abs(u(rng));
+        t_last[i] = 0;
+    }
+    const double h = w.physics.h;
+    DriftBound& bound = w.resources.get<DriftBound>(res::drift_bound.name);
+    bound.membership = store.membership();
+    bound.reset_at = 0;
+    bound.quantum = 0;
+    bound.shortest_raw = (st.lambda_v + 2 * st.lambda_f * st.lambda_f) * h / 0.5;  // speed(): 0.5 m/s
+    ASSERT_NEAR(bound.speed(st.lambda_v, st.lambda_f, h), 0.5, 1e-9);
+    auto& tl = w.resources.get<BinTimeline>(res::bin_timeline.name);
+    tl = BinTimeline::for_range(st.dt_min, st.dt_max);
+    ASSERT_GE(tl.max_bin, 8);
+    const std::uint64_t stride = BinTimeline::length(tl.max_bin - 1);  // 2.5 ms at dt_max 5 ms
+    tl.now = 0;
+    tl.next = stride;
+    auto bin = store.get(comp::bin);
+    auto ti_end = store.get(comp::ti_end);
+    auto dt = store.get(comp::dt);
+    auto active = store.get(comp::active);
+    std::vector<std::uint8_t> near_before(n, 0);
+    std::size_t added = 0, entered = 0;
+    for (int k = 0; k < 16; ++k) {
+        for (std::size_t i = 0; i < n; ++i) {
+            const bool due = (rng() % 20) == 0;
+            bin[i] = std::uint8_t(rng() % std::uint32_t(tl.max_bin + 1));
+            dt[i] = tl.seconds(BinTimeline::length(bin[i]));
+            ti_end[i] = due ? tl.next : tl.next + 2 * stride;
+            active[i] = 0;
+        }
+        w.resources.get<DueBuckets>(res::due_buckets.name).layout = ~std::uint64_t(0);  // refiled from ti_end
+        w.active_set.clear();
+        w.clock.t_ticks = ticks_of(tl, tl.next);
+        w.clock.t = to_seconds(w.clock.t_ticks);
+        const Vec3d shift(0.5 * w.clock.t, 0, 0);
+        w.moving_bodies[0].bounds = Aabb{start.min + shift, start.max + shift};
+        const std::vector<std::uint64_t> end_before(ti_end.begin(), ti_end.end());
+        run_system(select, w);
+        run_system(body, w);
+        std::vector<Index> expected;
+        std::size_t step_added = 0;
+        for (std::size_t i = 0; i < n; ++i) {
+            const Vec3 xi = position_at(w.clock.t_ticks, t_last[i], x0[i], v0[i], a[i]);
+            const bool near = near_moving_body(w.moving_bodies, xi, dt[i], Real(h));
+            const bool due = end_before[i] == tl.now;
+            if (due || near) expected.push_back(Index(i));
+            step_added += near && !due;
+            entered += near && !due && !near_before[i];
+            near_before[i] = near;
+        }
+        ASSERT_EQ(w.active_set, expected) << "step " << k;
+        EXPECT_EQ(w.counter_value(counter::active.name), expected.size());
+        added += step_added;
+        tl.next += stride;
+    }
+    std::printf("%zu rows; over 16 steps %zu added for the body (%zu entering its reach since the step before), "
+                "candidate list made %zu times\n",
+                n, added, entered, body.lists_made());
+    EXPECT_GT(added, 1000u);
+    EXPECT_GT(entered, 50u);
+    // Reused: the list is made when the box and the rows have together moved h (20 mm here, at
+    // 0.5 + 0.5 m/s: every 8 steps), not at every step.
+    EXPECT_LT(body.lists_made(), 8u);
+    EXPECT_GT(body.lists_made(), 1u);
 }
