@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "bench_util.hpp"
+#include "systems/active/binned_body_system.hpp"
 #include "systems/active/binned_select_system.hpp"
 #include "systems/density/density_system.hpp"
 #include "systems/forces/forces_system.hpp"
@@ -177,6 +178,69 @@ BENCHMARK(BM_Binned_drift_around_due)
     ->ArgsProduct({{100'000, 1'000'000}, {100, 10, 1}})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
+
+/// BM_Binned_body/<particles>/<list made>: BinnedBodySystem on a due step with 1 % of the rows
+/// due and a 0.08 x 0.08 m rod at rest through the middle of the lattice (a moving body, speed
+/// 0.8 m/s as `stirring_pool`'s): with its candidate list kept (0: the rows within reach + h of
+/// the rod are tested) or made anew from every row (1: what a step pays when the list's margin is
+/// used up, or after a re-sort; also the order of the scan of every row binned_select made before
+/// the system existed). `candidates` is the list's share of the rows.
+void BM_Binned_body(benchmark::State& state) {
+    const bool made = state.range(1) != 0;
+    auto w = bench::lattice_world(std::size_t(state.range(0)));
+    const std::size_t n = w->fluid.size();  // the nearest cube
+    const Aabb cube = w->domain;
+    const Vec3d mid = 0.5 * (cube.min + cube.max);
+    Scene& s = w->scene;
+    s.simulation.stepping.mode = SteppingMode::Binned;
+    w->moving_bodies.push_back(MovingBody{0, 0, 0, Aabb{Vec3d(mid.x() - 0.04, cube.min.y(), mid.z() - 0.04),
+                                                          Vec3d(mid.x() + 0.04, cube.max.y(), mid.z() + 0.04)}, 0.8});
+    const SteppingParams& st = s.simulation.stepping;
+    DriftSystem drift;
+    BinnedSelectSystem select(st.dt_min, st.dt_max);
+    BinnedBodySystem body(st);
+    drift.register_components(*w);
+    select.register_components(*w);
+    body.register_components(*w);
+    auto& tl = w->resources.get<BinTimeline>(res::bin_timeline.name);
+    tl = BinTimeline::for_range(st.dt_min, st.dt_max);
+    tl.now = 0;
+    tl.next = 4;
+    auto bin = w->fluid.store.get(comp::bin);
+    auto end = w->fluid.store.get(comp::ti_end);
+    for (std::size_t i = 0; i < n; ++i) {
+        const bool due = (i * 2654435761u) % 100u == 0;
+        bin[i] = due ? 2 : 3;
+        end[i] = due ? 4 : 8;
+    }
+    DriftBound& bound = w->resources.get<DriftBound>(res::drift_bound.name);
+    bound.membership = made ? 0 : w->fluid.store.membership();  // 0: void, the list is made every time
+    bound.shortest_raw = 1e-3;  // a slow fluid: the list stays valid
+    bound.quantum = 0;
+    w->clock.t_ticks = ticks_of(tl, 4);
+    w->clock.t = to_seconds(w->clock.t_ticks);
+    run_system(select, *w);
+    const std::vector<Index> set = w->active_set;
+    const std::vector<std::uint8_t> bin0(bin.begin(), bin.end());
+    const std::vector<std::uint64_t> end0(end.begin(), end.end());
+    run_system(body, *w);  // the first list
+    auto active = w->fluid.store.get(comp::active);
+    for (auto _ : state) {
+        state.PauseTiming();
+        std::copy(bin0.begin(), bin0.end(), bin.begin());
+        std::copy(end0.begin(), end0.end(), end.begin());
+        std::fill(active.begin(), active.end(), std::uint8_t(0));
+        for (Index i : set) active[i] = 1;
+        w->active_set = set;
+        state.ResumeTiming();
+        run_system(body, *w);
+        benchmark::ClobberMemory();
+    }
+    state.counters["candidates"] = double(w->counter_value(counter::body_candidates.name)) / double(n);
+    state.counters["added"] = double(w->active_set.size() - set.size()) / double(n);
+    state.counters["lists_made"] = double(body.lists_made());
+}
+BENCHMARK(BM_Binned_body)->ArgsProduct({{100'000, 1'000'000}, {0, 1}})->Unit(benchmark::kMillisecond)->UseRealTime();
 
 #define SPH_BINNED_BENCH(system)                                                          \
     static void BM_Binned_##system(benchmark::State& state) { bench_named(state, #system); } \

@@ -14,9 +14,8 @@
 /// jumps (DriftBound::net_shift_static: a row a moving body netted crossed into its box, so it
 /// was a candidate already, whatever speed the hit gave it). Otherwise (or when rows were reordered, added or restored) the list is made anew from
 /// every row. A candidate's position at the step's time comes from its base state (drift.hpp,
-/// the bits DriftSystem writes), so no row's position need be current: scenes with moving bodies
-/// keep lazy positions (drift_system.hpp), and this system does not wait for the fluid grid.
-/// The set equals a scan of every row with current positions.
+/// the bits DriftSystem writes): it reads no position, so it waits for neither the drift nor the
+/// fluid grid. The set equals a scan of every row with current positions.
 /// Cost: O(candidates) per due step; O(N) when the list is made anew.
 #include <cstdint>
 #include <limits>

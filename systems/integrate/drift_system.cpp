@@ -9,7 +9,6 @@
 
 #include <algorithm>
 #include <atomic>
-#include <limits>
 #include <numeric>
 
 #include "engine/data/components.hpp"
@@ -117,12 +116,9 @@ void DriftSystem::run(Context& ctx) {
     const Real reach = Real(ctx.physics().h) + grid.drift();
     const std::size_t n = x.size();
     const auto limit = std::size_t(kStreamShare * double(n));
-    // As many due rows as on a recent step whose cells reached the limit: streamed without the
-    // cell pass (which would stop at the limit), but for one step in kRetry, which looks again.
-    const bool wide = set.size() >= m_wide_due && ++m_wide_steps % kRetry != 0;
     m_cell_mark.resize(grid.cell_count(), 0);
     m_cells.clear();
-    std::size_t rows = wide ? limit : 0;
+    std::size_t rows = 0;
     for (std::size_t k = 0; k < set.size() && rows < limit; ++k) {
         place(set[k]);
         const Eigen::Vector3i lo = grid.cell_coords(x[set[k]] - Vec3::Constant(reach));
@@ -139,8 +135,6 @@ void DriftSystem::run(Context& ctx) {
             }
     }
     for (std::int64_t c : m_cells) m_cell_mark[std::size_t(c)] = 0;
-    if (!wide && rows >= limit) m_wide_due = std::min(m_wide_due, set.size());
-    if (!wide && rows < limit && set.size() >= m_wide_due) m_wide_due = std::numeric_limits<std::size_t>::max();  // a retry that fitted
     if (rows >= limit) {
         // A large share of the fluid (scattered due rows): every row, streamed, costs less.
         place_every_row(x, x0, v0, a, t_last, now);

@@ -48,10 +48,11 @@ Recipe make_wcsph_recipe(const Scene& scene) {
     const bool extrapolated = boundary && wall_pressure(scene) == WallPressure::Extrapolated;
     // binned: the lazy drift (systems/integrate/drift_system.hpp). Positions are placed lazily
     // (the grid's build places every row, a kept grid's step the rows around the due ones)
-    // unless something reads positions beyond the due rows' reach: the extrapolated walls'
-    // gather, a grid built every step. Then every row's position at the step's time, before
-    // anything reads one. (A moving body's wake-up computes its candidates' positions itself.)
-    const bool lazy_positions = binned && stepping.keep_grid && !extrapolated;
+    // unless something reads positions beyond the due rows' reach (the extrapolated walls'
+    // gather), the grid is built every step, or a body moves (measured: docs/results/benchmarks.md,
+    // "A moving body's wake-up"). Then every row's position at the step's time, before anything
+    // reads one.
+    const bool lazy_positions = binned && stepping.keep_grid && !moving && !extrapolated;
     if (binned && !lazy_positions) r.step.push_back(std::make_unique<DriftSystem>());
     if (binned) r.step.push_back(std::make_unique<BinnedSelectSystem>(stepping.dt_min, stepping.dt_max));
     // binned: the rows within a moving body's reach made due, from a list of candidates.
