@@ -26,6 +26,23 @@ using namespace sph;
 
 namespace {
 
+/// A fresh timeline at now = 0 with a scattered `share` of the rows due at quantum 4 (bin 2) and
+/// the rest at 8 (bin 3), so that the limiter and the wake-up have neighbours on other bins.
+void file_due_share(World& w, double share) {
+    const SteppingParams& st = w.scene.simulation.stepping;
+    auto& tl = w.resources.get<BinTimeline>(res::bin_timeline.name);
+    tl = BinTimeline::for_range(st.dt_min, st.dt_max);
+    tl.now = 0;
+    tl.next = 4;
+    auto bin = w.fluid.store.get(comp::bin);
+    auto end = w.fluid.store.get(comp::ti_end);
+    for (std::size_t i = 0; i < bin.size(); ++i) {
+        const bool due = double((i * 2654435761u) % 1000u) < 1000.0 * share;
+        bin[i] = due ? 2 : 3;
+        end[i] = due ? 4 : 8;
+    }
+}
+
 struct Pipeline {
     std::unique_ptr<World> w;
     std::vector<std::unique_ptr<System>> systems;
@@ -49,19 +66,11 @@ struct Pipeline {
         systems.push_back(std::make_unique<AsyncIntegrationSystem>(true));
         for (auto& s : systems) s->register_components(*w);
         for (auto& s : systems) run_system(*s, *w);  // t = 0: every particle due
-        // Then a scattered share is due at quantum 4 (bin 2) and the rest at 8 (bin 3), so the
-        // limiter and the wake-up have neighbours on other bins to look at.
+        // Then a scattered share is due at quantum 4 and the rest at 8.
+        file_due_share(*w, share);
         auto& tl = w->resources.get<BinTimeline>(res::bin_timeline.name);
-        tl = BinTimeline::for_range(st.dt_min, st.dt_max);
-        tl.now = 0;
-        tl.next = 4;
         auto bin = w->fluid.store.get(comp::bin);
         auto end = w->fluid.store.get(comp::ti_end);
-        for (std::size_t i = 0; i < bin.size(); ++i) {
-            const bool due = double((i * 2654435761u) % 1000u) < 1000.0 * share;
-            bin[i] = due ? 2 : 3;
-            end[i] = due ? 4 : 8;
-        }
         w->clock.t_ticks = ticks_of(tl, 4);
         w->clock.t = to_seconds(w->clock.t_ticks);
         w->resources.get<DueBuckets>(res::due_buckets.name).layout = ~std::uint64_t(0);  // refile
@@ -202,17 +211,10 @@ void BM_Binned_body(benchmark::State& state) {
     drift.register_components(*w);
     select.register_components(*w);
     body.register_components(*w);
-    auto& tl = w->resources.get<BinTimeline>(res::bin_timeline.name);
-    tl = BinTimeline::for_range(st.dt_min, st.dt_max);
-    tl.now = 0;
-    tl.next = 4;
+    file_due_share(*w, 0.01);
+    const auto& tl = w->resources.get<BinTimeline>(res::bin_timeline.name);
     auto bin = w->fluid.store.get(comp::bin);
     auto end = w->fluid.store.get(comp::ti_end);
-    for (std::size_t i = 0; i < n; ++i) {
-        const bool due = (i * 2654435761u) % 100u == 0;
-        bin[i] = due ? 2 : 3;
-        end[i] = due ? 4 : 8;
-    }
     DriftBound& bound = w->resources.get<DriftBound>(res::drift_bound.name);
     bound.membership = made ? 0 : w->fluid.store.membership();  // 0: void, the list is made every time
     bound.shortest_raw = 1e-3;  // a slow fluid: the list stays valid

@@ -37,6 +37,20 @@ inline Scene tank_scene(Vec3d fluid_max, Vec3d box_max, double r = 0.01) {
     return s;
 }
 
+/// A 0.4 x 0.12 x 0.12 m pool at r = 5 mm (He et al.'s physics) in `binned` without the acoustic
+/// condition, with a 4 x 16 x 4 cm box pushed through it at 0.5 m/s along x.
+inline Scene pool_with_pushed_box() {
+    Scene s = tank_scene(Vec3d(0.4, 0.12, 0.12), Vec3d(0.4, 0.25, 0.12), 0.005);
+    s.simulation.stepping.mode = SteppingMode::Binned;
+    s.simulation.stepping.acoustic = false;
+    BoundaryDesc box;
+    box.shape = BoundaryShape::Box;
+    box.box = Aabb{Vec3d(0.10, 0.04, 0.03), Vec3d(0.14, 0.20, 0.07)};
+    box.motion = linear_motion(Vec3d(0.5, 0, 0));
+    s.boundaries.push_back(box);
+    return s;
+}
+
 /// Moves every fluid particle by up to `fraction` r per axis (uniform, seeded), keeping it 2 mm
 /// inside the walls of a container at the origin.
 inline void jitter(World& w, std::uint32_t seed, Real fraction) {

@@ -461,18 +461,6 @@ TEST(BinnedStepping, KeptGridEqualsAGridBuiltEveryStep) {
     EXPECT_GT(kept_after_net_total, 0);
 }
 
-namespace {
-/// A 0.4 m pool in `binned` (acoustic off) with a 4 x 16 x 4 cm box pushed through it at 0.5 m/s.
-Scene pool_with_pushed_box() {
-    Scene s = with_mode(test::tank_scene(Vec3d(0.4, 0.12, 0.12), Vec3d(0.4, 0.25, 0.12), 0.005), SteppingMode::Binned, false);
-    BoundaryDesc box;
-    box.shape = BoundaryShape::Box;
-    box.box = Aabb{Vec3d(0.10, 0.04, 0.03), Vec3d(0.14, 0.20, 0.07)};
-    box.motion = linear_motion(Vec3d(0.5, 0, 0));
-    s.boundaries.push_back(box);
-    return s;
-}
-}  // namespace
 
 // The kept grid with a moving body: binned_select makes every row within the body's reach due,
 // beyond what the last step planned, so a step may evaluate every row while the grid is kept
@@ -480,7 +468,7 @@ Scene pool_with_pushed_box() {
 // for 0.1 s, keep_grid true against false, every step's statistics and every column at the end
 // bit for bit.
 TEST(BinnedStepping, KeptGridWithAMovingBodyEqualsAGridBuiltEveryStep) {
-    Scene s = pool_with_pushed_box();
+    Scene s = test::pool_with_pushed_box();
     Scene built = s;
     built.simulation.stepping.keep_grid = false;
     auto a = make_simulation(s);
@@ -504,7 +492,7 @@ TEST(BinnedStepping, KeptGridWithAMovingBodyEqualsAGridBuiltEveryStep) {
 // must lie within the reach grown by that margin, and a row within the reach shrunk by it must
 // have been added.
 TEST(BinnedStepping, SelectionAddsTheRowsWithinReachOfAMovingBody) {
-    Scene s = pool_with_pushed_box();
+    Scene s = test::pool_with_pushed_box();
     s.fluid_blocks.clear();  // fluid around the box only
     for (const Aabb& block : {Aabb{Vec3d(0, 0, 0), Vec3d(0.10, 0.12, 0.12)}, Aabb{Vec3d(0.14, 0, 0), Vec3d(0.4, 0.12, 0.12)},
                               Aabb{Vec3d(0.10, 0, 0), Vec3d(0.14, 0.12, 0.03)}, Aabb{Vec3d(0.10, 0, 0.07), Vec3d(0.14, 0.12, 0.12)},

@@ -149,15 +149,8 @@ TEST(BinnedStepSystem, EveryRowDueVisitsOnlyTheRowsNearABinEdgeByCell) {
 // its candidate list between steps; rows drift into the reach during its life (counted), and a
 // list kept on the box's own motion only (without the rows' drift) misses some at step 11.
 TEST(BinnedBodySystem, AddsExactlyTheRowsWithinReachOfAMovingBody) {
-    Scene s = test::tank_scene(Vec3d(0.4, 0.12, 0.12), Vec3d(0.4, 0.25, 0.12), 0.005);
-    s.simulation.stepping.mode = SteppingMode::Binned;
-    BoundaryDesc box;
-    box.shape = BoundaryShape::Box;
-    box.box = Aabb{Vec3d(0.10, 0.04, 0.03), Vec3d(0.14, 0.20, 0.07)};
-    box.motion = linear_motion(Vec3d(0.5, 0, 0));
-    s.boundaries.push_back(box);
     World w;
-    initialise_world(w, s);
+    initialise_world(w, test::pool_with_pushed_box());
     test::jitter(w, 3, 0.3f);
     const SteppingParams& st = w.scene.simulation.stepping;
     BinnedSelectSystem select(st.dt_min, st.dt_max);
