@@ -29,25 +29,16 @@ void BinnedBodySystem::register_components(World& w) {
     w.resources.add<DriftBound>(res::drift_bound.name, Lifetime::Scratch);
 }
 
-namespace {
-
-/// x_i at `now` from its base state (a row evaluated at `now` holds x = x_last).
-Vec3 position_now(Tick now, std::int64_t t_last, const Vec3& x0, const Vec3& v0, const Vec3& a) {
-    return t_last == now ? x0 : position_at(now, t_last, x0, v0, a);
-}
-
-}  // namespace
-
 void BinnedBodySystem::make_list(Context& ctx, const std::vector<MovingBody>& bodies, double reach) {
     const auto x0 = ctx.read(fluid(comp::position_last));
     const auto v0 = ctx.read(fluid(comp::velocity_last));
     const auto a = ctx.read(fluid(comp::acceleration));
     const auto t_last = ctx.read(fluid(comp::t_last));
     const Tick now = ctx.clock().t_ticks;
-    std::vector<MovingBody> wide = bodies;
-    for (MovingBody& b : wide) b.speed = 0;  // near_moving_body's reach is then h: widen the box by the rest
     const Real h = ctx.physics().h;
-    for (MovingBody& b : wide) {
+    std::vector<MovingBody> wide = bodies;
+    for (MovingBody& b : wide) {  // at speed 0 near_moving_body's reach is h: the box widened by the rest
+        b.speed = 0;
         b.bounds.min.array() -= reach - double(h);
         b.bounds.max.array() += reach - double(h);
     }
@@ -55,7 +46,7 @@ void BinnedBodySystem::make_list(Context& ctx, const std::vector<MovingBody>& bo
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x0.size(), 4096), [&](const auto& r) {
         auto& out = found.local();
         for (std::size_t i = r.begin(); i < r.end(); ++i)
-            if (near_moving_body(wide, position_now(now, t_last[i], x0[i], v0[i], a[i]), 0, h)) out.push_back(Index(i));
+            if (near_moving_body(wide, position_from_base(now, t_last[i], x0[i], v0[i], a[i]), 0, h)) out.push_back(Index(i));
     });
     m_list.clear();
     for (auto& v : found) m_list.insert(m_list.end(), v.begin(), v.end());
@@ -63,7 +54,6 @@ void BinnedBodySystem::make_list(Context& ctx, const std::vector<MovingBody>& bo
     m_boxes.clear();
     for (const MovingBody& b : bodies) m_boxes.push_back(b.bounds);
     m_layout = ctx.layout(SetId::Fluid);
-    m_membership = ctx.membership(SetId::Fluid);
     m_moved = 0;
     ++m_lists_made;
 }
@@ -114,7 +104,7 @@ void BinnedBodySystem::run(Context& ctx) {
     m_added.clear();
     for (const Index i : m_list) {
         if (active[i]) continue;  // due already
-        if (!near_moving_body(bodies, position_now(now, t_last[i], x0[i], v0[i], a[i]), dt[i], Real(h))) continue;
+        if (!near_moving_body(bodies, position_from_base(now, t_last[i], x0[i], v0[i], a[i]), dt[i], Real(h))) continue;
         ti_end[i] = tl.now;
         bin[i] = std::uint8_t(std::min<int>(bin[i], top));
         buckets.bin_lo = std::min<int>(buckets.bin_lo, bin[i]);

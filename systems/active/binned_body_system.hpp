@@ -55,7 +55,6 @@ private:
     std::vector<Index> m_list;             ///< the candidates, ascending
     std::vector<Aabb> m_boxes;             ///< each body's box when the list was made
     std::uint64_t m_layout = std::numeric_limits<std::uint64_t>::max();      ///< the fluid's layout then
-    std::uint64_t m_membership = std::numeric_limits<std::uint64_t>::max();  ///< and its membership
     double m_moved = std::numeric_limits<double>::infinity();  ///< d_f: how far any row can have moved since
     Tick m_last = 0;                       ///< the tick of the last step seen (d_f is summed from there)
     std::vector<Index> m_added;            ///< the rows this step adds

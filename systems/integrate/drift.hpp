@@ -23,6 +23,12 @@ inline Vec3 position_at(Tick now, std::int64_t t_last, const Vec3& x0, const Vec
     return drifted_position(x0, drifted_velocity(v0, a, dt), dt);
 }
 
+/// x_i at `now` read from the base state alone: a row evaluated at `now` holds x = x_last (what a
+/// system that does not wait for the drift's placement computes in its place).
+inline Vec3 position_from_base(Tick now, std::int64_t t_last, const Vec3& x0, const Vec3& v0, const Vec3& a) {
+    return t_last == now ? x0 : position_at(now, t_last, x0, v0, a);
+}
+
 /// rho_i = rho_i(t_last) + Delta t drho_i/dt (line 9; He eq. 5 gives the slope).
 inline Real drifted_density(Real rho0, Real drho, Real dt) { return rho0 + dt * drho; }
 

@@ -37,7 +37,7 @@ void BoundaryNeighbourSystem::run(Context& ctx) {
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, set.size(), 4096), [&](const auto& r) {
             for (std::size_t k = r.begin(); k < r.end(); ++k) {
                 const Index i = set[k];
-                m_query[i] = t_last[i] == now ? x0[i] : position_at(now, t_last[i], x0[i], v0[i], a[i]);
+                m_query[i] = position_from_base(now, t_last[i], x0[i], v0[i], a[i]);
             }
         });
         x = m_query;
