@@ -2,7 +2,7 @@
 # Installs the Debian 12 packages the build needs, only if some are missing (run as root);
 # with --test, also those the test suite needs.
 set -euo pipefail
-PACKAGES=(build-essential cmake libtbb-dev libeigen3-dev libspdlog-dev nlohmann-json3-dev libcli11-dev
+PACKAGES=(build-essential cmake ninja-build libtbb-dev libeigen3-dev libspdlog-dev nlohmann-json3-dev libcli11-dev
           libgtest-dev libgmock-dev libbenchmark-dev libpng-dev libhwy-dev python3 python3-numpy python3-matplotlib
           libopenvdb-dev libboost-iostreams-dev  # OpenVDB (its find module also asks for Boost.Iostreams)
           clang libclang-rt-14-dev)  # clang + its runtime: libFuzzer for tools/fuzz.sh
