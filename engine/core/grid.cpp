@@ -43,8 +43,13 @@ UniformGrid::UniformGrid(const Aabb& box, Real cell_size, const std::string& wha
     m_offset.assign(m_cells + 1, 0);
 }
 
+std::size_t UniformGrid::table_bytes() const {
+    return (m_chunk_start.capacity() + m_wide.capacity()) * sizeof(Index) + m_offset.capacity() * sizeof(std::uint16_t);
+}
+
 std::size_t UniformGrid::bytes() const {
-    return (m_chunk_start.capacity() + m_wide.capacity() + m_sorted_index.capacity()) * sizeof(Index) +
+    return (m_chunk_start.capacity() + m_wide.capacity() + m_sorted_index.capacity() + m_cell_of.capacity() +
+            m_next.capacity()) * sizeof(Index) +
            m_offset.capacity() * sizeof(std::uint16_t) + (m_sx.capacity() + m_sy.capacity() + m_sz.capacity()) * sizeof(Real) +
            m_near.capacity();
 }
@@ -120,27 +125,31 @@ void UniformGrid::build(std::span<const Vec3> positions) {
     const std::size_t n = positions.size();
     const std::size_t cells = cell_count();
     m_count = n;
-    std::vector<Index> cell_of(n);  // scratch: not kept between builds
+    m_cell_of.resize(n);
+    Index* const cell_of = m_cell_of.data();
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const auto& r) {
         for (std::size_t i = r.begin(); i < r.end(); ++i) cell_of[i] = Index(cell_index(cell_coords(positions[i])));
     });
-    // Counting sort: particles per cell, their prefix sums (the first slot of each cell), then
-    // each particle in index order to the next free slot of its cell (so ties keep index order).
-    // The starts are built in a scratch table of 32 bits and then packed.
-    std::vector<Index> start(cells + 1, 0);
-    for (std::size_t i = 0; i < n; ++i) ++start[cell_of[i] + 1];
-    for (std::size_t c = 1; c <= cells; ++c) start[c] += start[c - 1];
+    // Counting sort: particles per cell, then each particle in index order to the next free slot
+    // of its cell (so ties keep index order). next[c + 1] counts cell c; the prefix sums make
+    // next[c] the first slot of cell c, and the scatter advances it to the cell's end, the first
+    // slot of c + 1: start(c) = next[c - 1] afterwards, no pass to shift the table back. Serial:
+    // the build runs beside the boundary's grid and search, where a histogram per thread cost
+    // more than it saved (docs/results/benchmarks.md).
+    m_next.assign(cells + 1, 0);
+    Index* const next = m_next.data();
+    for (std::size_t i = 0; i < n; ++i) ++next[cell_of[i] + 1];
+    for (std::size_t c = 1; c <= cells; ++c) next[c] += next[c - 1];
     m_sorted_index.resize(n + kPadding);
     std::fill(m_sorted_index.begin() + std::ptrdiff_t(n), m_sorted_index.end(), Index(0));  // readable: particle 0
-    for (std::size_t i = 0; i < n; ++i) m_sorted_index[start[cell_of[i]]++] = Index(i);
-    // The scatter advanced each cell's start to its end (the next cell's start): shift back.
-    std::copy_backward(start.begin(), start.begin() + std::ptrdiff_t(cells), start.end());
-    start[0] = 0;
+    for (std::size_t i = 0; i < n; ++i) m_sorted_index[next[cell_of[i]]++] = Index(i);
+    const Index* const cell_end = next;  // cell_end[c]: the end of cell c (the last, next[cells], is n)
+    auto start_of = [&](std::size_t c) { return c == 0 ? Index(0) : next[c - 1]; };
     if (m_mark_empty) {
         // The occupied cells dilated by one cell along x, then y, then z: the 27-cell max, in
         // three passes over the cells.
         std::vector<std::uint8_t> a(cells), b(cells);
-        for (std::size_t c = 0; c < cells; ++c) a[c] = start[c + 1] > start[c];
+        for (std::size_t c = 0; c < cells; ++c) a[c] = cell_end[c] > start_of(c);
         const std::size_t nx = std::size_t(m_dims[0]), ny = std::size_t(m_dims[1]), nz = std::size_t(m_dims[2]);
         const std::size_t nxy = nx * ny;
         for (std::size_t row = 0; row < ny * nz; ++row) {  // along x, within each row of cells
@@ -166,21 +175,23 @@ void UniformGrid::build(std::span<const Vec3> positions) {
     } else {
         std::vector<std::uint8_t>().swap(m_near);
     }
-    // Pack: per chunk of 16 cells its first start, then each cell's offset from it.
+    // Pack: per chunk of 16 cells its first start, then each cell's offset from it (cells + 1
+    // starts, the last one n).
     constexpr std::size_t kChunk = std::size_t(1) << kChunkBits;
     Index widest = 0;
     for (std::size_t q = 0, c0 = 0; c0 <= cells; ++q, c0 += kChunk) {
-        const Index base = start[c0];
+        const Index base = start_of(c0);
         m_chunk_start[q] = base;
         const std::size_t c1 = std::min(cells + 1, c0 + kChunk);
-        for (std::size_t c = c0; c < c1; ++c) m_offset[c] = std::uint16_t(start[c] - base);
-        widest = std::max(widest, start[c1 - 1] - base);  // starts rise within a chunk
+        for (std::size_t c = c0; c < c1; ++c) m_offset[c] = std::uint16_t(start_of(c) - base);
+        widest = std::max(widest, start_of(c1 - 1) - base);  // starts rise within a chunk
     }
-    const bool wide = widest > 0xffff;
-    if (wide)
-        m_wide.swap(start);
-    else
+    if (widest > 0xffff) {
+        m_wide.resize(cells + 1);
+        for (std::size_t c = 0; c <= cells; ++c) m_wide[c] = start_of(c);
+    } else {
         std::vector<Index>().swap(m_wide);
+    }
     if (m_keep_coordinates) {
         // The padding slots hold a point far outside every query's range, so a whole vector
         // loaded at the end of the last range filters them out.

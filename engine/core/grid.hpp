@@ -43,7 +43,9 @@ public:
     static constexpr std::uint64_t kMaxCells = (std::uint64_t(1) << 32) - 2;
 
     /// @brief Sorts particle indices by cell (a counting sort, so ties keep index order and the
-    /// result is deterministic). O(N + cells); the cell keys are parallel. A query passes the
+    /// result is deterministic, the same for any number of threads). O(N + cells); the cell keys
+    /// and the coordinates are parallel. Its scratch (4 bytes a particle and a cell) is kept
+    /// between builds. A query passes the
     /// particle set the grid was built from, which must not be reordered, shrunk or moved
     /// between the build and the query.
     void build(std::span<const Vec3> positions);
@@ -164,6 +166,8 @@ public:
     std::size_t cell_count() const { return m_cells; }
     std::size_t particle_count() const { return m_count; }
     std::size_t bytes() const;
+    /// The cell table alone (a packed start per cell, or the 32-bit fallback with it).
+    std::size_t table_bytes() const;
 
 private:
     /// for_each_candidate of a drifted grid: the particles whose cell at `positions` is one of
@@ -184,6 +188,8 @@ private:
     std::vector<std::uint16_t> m_offset;
     std::vector<Index> m_wide;
     std::size_t m_count = 0;
+    std::vector<Index> m_cell_of;         ///< build scratch: each particle's cell
+    std::vector<Index> m_next;            ///< build scratch: per cell, its count, then its next free slot
     std::vector<Index> m_sorted_index;    ///< particle_count() + kPadding
     bool m_keep_coordinates = false;
     std::vector<Real> m_sx, m_sy, m_sz;   ///< with keep_coordinates: particle_count() + kPadding each

@@ -8,6 +8,8 @@
 #include "engine/core/errors.hpp"
 #include "engine/core/grid.hpp"
 
+#include <tbb/task_arena.h>
+
 using namespace sph;
 
 namespace {
@@ -92,8 +94,8 @@ TEST(NeighbourSearch, CellTableHoldsPilesOfParticlesInOneCell) {
         }
         EXPECT_EQ(mismatched, 0u);
         EXPECT_EQ(grid.cell_start(std::int64_t(grid.cell_count())), n);
-        // The packed table is 2.25 bytes a cell, the fallback adds 4 (bytes() counts both).
-        const double table = double(grid.bytes() - (n + UniformGrid::kPadding) * sizeof(Index)) / double(grid.cell_count());
+        // The packed table is 2.25 bytes a cell, the fallback adds 4 (table_bytes() counts both).
+        const double table = double(grid.table_bytes()) / double(grid.cell_count());
         if (n == spread)
             EXPECT_NEAR(table, 2.25, 0.01);
         else
@@ -104,6 +106,39 @@ TEST(NeighbourSearch, CellTableHoldsPilesOfParticlesInOneCell) {
         for (Index i = 0; i < spread; i += 7) some.push_back(i);
         build_neighbour_lists(grid, set, set, h, true, QuerySubset{some, false, false}, lists, true);
         expect_equal_to_brute(grid, set, set, h, true, lists, some);
+    }
+}
+
+// A build is one stable counting sort: slots in (cell, index) order, each cell's start the count
+// of the particles in lower cells, for any number of threads (its keys and table are computed in
+// parallel) and on a rebuild into the same grid (its scratch reused), against std::stable_sort
+// of the indices by cell (the oracle): 150,000 particles with piles, air and particles clamped
+// in from outside the box.
+TEST(NeighbourSearch, BuildIsOneStableCountingSortForAnyThreadCount) {
+    const Real h = 0.05f;
+    std::vector<Vec3> pts = cloud(140'000, h, 11);
+    std::mt19937 rng(12);
+    std::uniform_real_distribution<Real> u(0.0f, 0.01f);
+    for (int k = 0; k < 9'000; ++k) pts.emplace_back(0.3f + u(rng), -0.4f + u(rng), 0.1f + u(rng));  // a pile
+    for (int k = 0; k < 1'000; ++k) pts.emplace_back(3.0f + u(rng), -2.0f, 0.2f);  // outside: clamped to a border cell
+    std::shuffle(pts.begin(), pts.end(), rng);  // no order to lean on
+    UniformGrid ref_grid(Aabb{Vec3d(-1, -1, -1), Vec3d(0.5, 0.5, 0.5)}, h);
+    std::vector<Index> order(pts.size());
+    for (Index i = 0; i < order.size(); ++i) order[i] = i;
+    std::stable_sort(order.begin(), order.end(), [&](Index a, Index b) { return ref_grid.cell_of(pts[a]) < ref_grid.cell_of(pts[b]); });
+    std::vector<Index> starts(ref_grid.cell_count() + 1, 0);
+    for (const Vec3& p : pts) ++starts[std::size_t(ref_grid.cell_of(p)) + 1];
+    for (std::size_t c = 1; c < starts.size(); ++c) starts[c] += starts[c - 1];
+    for (const int threads : {1, 2, 3, 4}) {
+        SCOPED_TRACE(threads);
+        tbb::task_arena arena(threads);
+        UniformGrid grid(Aabb{Vec3d(-1, -1, -1), Vec3d(0.5, 0.5, 0.5)}, h);
+        for (int build = 0; build < 2; ++build) arena.execute([&] { grid.build(pts); });  // the scratch reused
+        ASSERT_EQ(grid.sorted_index().size(), pts.size());
+        EXPECT_TRUE(std::equal(order.begin(), order.end(), grid.sorted_index().begin()));
+        std::size_t wrong_starts = 0;
+        for (std::size_t c = 0; c < starts.size(); ++c) wrong_starts += grid.cell_start(std::int64_t(c)) != starts[c];
+        EXPECT_EQ(wrong_starts, 0u);
     }
 }
 
