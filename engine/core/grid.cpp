@@ -14,6 +14,7 @@
 #include <sstream>
 #include <string>
 #include <limits>
+#include <memory>
 #include <stdexcept>
 #include <utility>
 
@@ -48,8 +49,7 @@ std::size_t UniformGrid::table_bytes() const {
 }
 
 std::size_t UniformGrid::bytes() const {
-    return (m_chunk_start.capacity() + m_wide.capacity() + m_sorted_index.capacity() + m_cell_of.capacity() +
-            m_next.capacity()) * sizeof(Index) +
+    return (m_chunk_start.capacity() + m_wide.capacity() + m_sorted_index.capacity()) * sizeof(Index) +
            m_offset.capacity() * sizeof(std::uint16_t) + (m_sx.capacity() + m_sy.capacity() + m_sz.capacity()) * sizeof(Real) +
            m_near.capacity();
 }
@@ -125,8 +125,9 @@ void UniformGrid::build(std::span<const Vec3> positions) {
     const std::size_t n = positions.size();
     const std::size_t cells = cell_count();
     m_count = n;
-    m_cell_of.resize(n);
-    Index* const cell_of = m_cell_of.data();
+    // Scratch, uninitialised (zeroing it cost a pass over 4 bytes a particle), freed on return.
+    const std::unique_ptr<Index[]> cell_of_scratch(new Index[n]);
+    Index* const cell_of = cell_of_scratch.get();
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const auto& r) {
         for (std::size_t i = r.begin(); i < r.end(); ++i) cell_of[i] = Index(cell_index(cell_coords(positions[i])));
     });
@@ -136,8 +137,8 @@ void UniformGrid::build(std::span<const Vec3> positions) {
     // slot of c + 1: start(c) = next[c - 1] afterwards, no pass to shift the table back. Serial:
     // the build runs beside the boundary's grid and search, where a histogram per thread cost
     // more than it saved (docs/results/benchmarks.md).
-    m_next.assign(cells + 1, 0);
-    Index* const next = m_next.data();
+    std::vector<Index> next_scratch(cells + 1, 0);
+    Index* const next = next_scratch.data();
     for (std::size_t i = 0; i < n; ++i) ++next[cell_of[i] + 1];
     for (std::size_t c = 1; c <= cells; ++c) next[c] += next[c - 1];
     m_sorted_index.resize(n + kPadding);

@@ -44,8 +44,7 @@ public:
 
     /// @brief Sorts particle indices by cell (a counting sort, so ties keep index order and the
     /// result is deterministic, the same for any number of threads). O(N + cells); the cell keys
-    /// and the coordinates are parallel. Its scratch (4 bytes a particle and a cell) is kept
-    /// between builds. A query passes the
+    /// and the coordinates are parallel. A query passes the
     /// particle set the grid was built from, which must not be reordered, shrunk or moved
     /// between the build and the query.
     void build(std::span<const Vec3> positions);
@@ -188,8 +187,6 @@ private:
     std::vector<std::uint16_t> m_offset;
     std::vector<Index> m_wide;
     std::size_t m_count = 0;
-    std::vector<Index> m_cell_of;         ///< build scratch: each particle's cell
-    std::vector<Index> m_next;            ///< build scratch: per cell, its count, then its next free slot
     std::vector<Index> m_sorted_index;    ///< particle_count() + kPadding
     bool m_keep_coordinates = false;
     std::vector<Real> m_sx, m_sy, m_sz;   ///< with keep_coordinates: particle_count() + kPadding each

@@ -111,7 +111,7 @@ TEST(NeighbourSearch, CellTableHoldsPilesOfParticlesInOneCell) {
 
 // A build is one stable counting sort: slots in (cell, index) order, each cell's start the count
 // of the particles in lower cells, for any number of threads (its keys and table are computed in
-// parallel) and on a rebuild into the same grid (its scratch reused), against std::stable_sort
+// parallel) and on a rebuild into the same grid, against std::stable_sort
 // of the indices by cell (the oracle): 150,000 particles with piles, air and particles clamped
 // in from outside the box.
 TEST(NeighbourSearch, BuildIsOneStableCountingSortForAnyThreadCount) {
@@ -133,7 +133,7 @@ TEST(NeighbourSearch, BuildIsOneStableCountingSortForAnyThreadCount) {
         SCOPED_TRACE(threads);
         tbb::task_arena arena(threads);
         UniformGrid grid(Aabb{Vec3d(-1, -1, -1), Vec3d(0.5, 0.5, 0.5)}, h);
-        for (int build = 0; build < 2; ++build) arena.execute([&] { grid.build(pts); });  // the scratch reused
+        for (int build = 0; build < 2; ++build) arena.execute([&] { grid.build(pts); });  // a rebuild as well
         ASSERT_EQ(grid.sorted_index().size(), pts.size());
         EXPECT_TRUE(std::equal(order.begin(), order.end(), grid.sorted_index().begin()));
         std::size_t wrong_starts = 0;
