@@ -144,7 +144,7 @@ void UniformGrid::build(std::span<const Vec3> positions) {
     m_sorted_index.resize(n + kPadding);
     std::fill(m_sorted_index.begin() + std::ptrdiff_t(n), m_sorted_index.end(), Index(0));  // readable: particle 0
     for (std::size_t i = 0; i < n; ++i) m_sorted_index[next[cell_of[i]]++] = Index(i);
-    const Index* const cell_end = next;  // cell_end[c]: the end of cell c (the last, next[cells], is n)
+    const Index* const cell_end = next;  // cell_end[c]: the end of cell c < cells (the last cell's is n)
     auto start_of = [&](std::size_t c) { return c == 0 ? Index(0) : next[c - 1]; };
     if (m_mark_empty) {
         // The occupied cells dilated by one cell along x, then y, then z: the 27-cell max, in
