@@ -126,8 +126,7 @@ void UniformGrid::build(std::span<const Vec3> positions) {
     const std::size_t cells = cell_count();
     m_count = n;
     // Scratch, uninitialised (zeroing it cost a pass over 4 bytes a particle), freed on return.
-    const std::unique_ptr<Index[]> cell_of_scratch(new Index[n]);
-    Index* const cell_of = cell_of_scratch.get();
+    const auto cell_of = std::make_unique_for_overwrite<Index[]>(n);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const auto& r) {
         for (std::size_t i = r.begin(); i < r.end(); ++i) cell_of[i] = Index(cell_index(cell_coords(positions[i])));
     });

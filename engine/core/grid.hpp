@@ -44,9 +44,8 @@ public:
 
     /// @brief Sorts particle indices by cell (a counting sort, so ties keep index order and the
     /// result is deterministic, the same for any number of threads). O(N + cells); the cell keys
-    /// and the coordinates are parallel. A query passes the
-    /// particle set the grid was built from, which must not be reordered, shrunk or moved
-    /// between the build and the query.
+    /// and the coordinates are parallel. A query passes the particle set the grid was built
+    /// from, which must not be reordered, shrunk or moved between the build and the query.
     void build(std::span<const Vec3> positions);
 
     /// @brief With `on`, every build also marks the cells whose 27-cell neighbourhood holds no
