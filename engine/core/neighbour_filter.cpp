@@ -10,6 +10,10 @@
 #include <hwy/foreach_target.h>  // IWYU pragma: keep
 #include <hwy/highway.h>
 
+#include <array>
+#include <bit>
+#include <cstdint>
+
 #include "engine/core/grid.hpp"
 #include "engine/core/neighbour_filter.hpp"
 
@@ -19,6 +23,42 @@ namespace HWY_NAMESPACE {
 namespace hn = hwy::HWY_NAMESPACE;
 
 #ifndef SPH_DOUBLE
+#if HWY_TARGET == HWY_AVX2
+/// The 8-lane compress of AVX2 by a permutation table: entry m holds, in 4-bit fields, the lanes
+/// whose bit is set in m in ascending order, then the others. Highway 1.0.3 (Debian 12) builds
+/// the same table as a non-static constexpr array inside Compress, which GCC copies to the stack
+/// (1 KiB) on every call (google/highway#1139): that made the AVX2 filter slower than the scalar
+/// one (docs/results/benchmarks.md, "The AVX2 compress"). Static here, so it is read in place.
+constexpr std::array<std::uint32_t, 256> compress_nibbles() {
+    std::array<std::uint32_t, 256> table{};
+    for (std::uint32_t m = 0; m < 256; ++m) {
+        std::uint32_t packed = 0, field = 0;
+        for (int selected = 1; selected >= 0; --selected)
+            for (std::uint32_t lane = 0; lane < 8; ++lane)
+                if (((m >> lane) & 1u) == std::uint32_t(selected)) packed |= lane << (4 * field++);
+        table[m] = packed;
+    }
+    return table;
+}
+alignas(64) static constexpr std::array<std::uint32_t, 256> kCompressNibbles = compress_nibbles();
+
+template <class DU>
+HWY_INLINE hn::Vec<DU> CompressIndices(DU du, hn::Vec<DU> v, hn::Mask<DU> in, std::size_t& count) {
+    std::uint8_t bits = 0;
+    hn::StoreMaskBits(du, in, &bits);
+    count = std::size_t(std::popcount(bits));
+    alignas(32) static constexpr std::uint32_t kShifts[8] = {0, 4, 8, 12, 16, 20, 24, 28};
+    const auto lanes = hn::And(hn::Shr(hn::Set(du, kCompressNibbles[bits]), hn::Load(du, kShifts)), hn::Set(du, 7u));
+    return hn::TableLookupLanes(v, hn::IndicesFromVec(du, lanes));
+}
+#else
+template <class DU>
+HWY_INLINE hn::Vec<DU> CompressIndices(DU du, hn::Vec<DU> v, hn::Mask<DU> in, std::size_t& count) {
+    count = hn::CountTrue(du, in);
+    return hn::Compress(v, in);
+}
+#endif
+
 /// Filters slots [begin, end) of slot-ordered arrays x, y, z, j against xi, appending the indices
 /// in range to dst + c; returns the new count. Masked: the last vector's lanes past `end` are
 /// masked off (they may hold real candidates); otherwise they must hold far points.
@@ -41,8 +81,9 @@ Index FilterRun(const float* x, const float* y, const float* z, const Index* jx,
         if constexpr (Masked) in = hn::And(in, hn::FirstN(du, end - k));
         // Compress into a register and store the whole vector (the caller's buffer has a
         // vector of slack): on Zen 4 the memory form of vpcompressd is microcoded.
-        hn::StoreU(hn::Compress(j, in), du, dst + c);
-        c += Index(hn::CountTrue(du, in));
+        std::size_t in_range = 0;
+        hn::StoreU(CompressIndices(du, j, in, in_range), du, dst + c);
+        c += Index(in_range);
     }
     return c;
 }
