@@ -178,6 +178,9 @@ struct World {
     /// to the step's time (FluidGridSystem: every row, in order, when it builds; DriftSystem:
     /// the rows a kept grid's searches around the due rows read). The others lag until read.
     std::vector<Index> placed;
+    /// Binned stepping: the rows whose step BinnedStepSystem set this step (the active rows and
+    /// the sleeping ones it woke, ascending), where it wrote their Delta t_i.
+    std::vector<Index> stepped;
     /// Set by a recipe whose step leaves rows behind the clock (binned stepping's lazy drift):
     /// brings every fluid row to the clock's time. Simulation::synchronise calls it before
     /// anything reads the whole fluid (observers, the spatial sort, the end of a run).
@@ -218,6 +221,7 @@ inline constexpr Resource<std::vector<Index>> halo_set{"fluid.halo_set", &World:
 inline constexpr Resource<std::vector<Index>> collided{"fluid.collided", &World::collided};
 inline constexpr Resource<std::vector<Index>> drifted{"fluid.drifted", &World::drifted};
 inline constexpr Resource<std::vector<Index>> placed{"fluid.placed", &World::placed};
+inline constexpr Resource<std::vector<Index>> stepped{"fluid.stepped", &World::stepped};
 inline constexpr Resource<std::vector<MovingBody>> moving_bodies{"boundary.moving_bodies", &World::moving_bodies};
 }  // namespace res
 

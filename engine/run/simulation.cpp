@@ -161,6 +161,7 @@ void Simulation::trace_non_finite(std::size_t system) {
     if (access.written_rows() == key_of(res::collided)) rows = &m_world.collided;
     if (access.written_rows() == key_of(res::drifted)) rows = &m_world.drifted;
     if (access.written_rows() == key_of(res::placed)) rows = &m_world.placed;
+    if (access.written_rows() == key_of(res::stepped)) rows = &m_world.stepped;
     const std::size_t n = store.size();
     // A row list names each row at most once (Access::rows), so n of them are every row: read
     // in order, without the index.

@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <iterator>
 #include <limits>
 
 #include "engine/core/grid.hpp"
@@ -23,7 +24,9 @@ Access BinnedStepSystem::access() const {
     return Access()
         .read(res::active_set, res::fluid_neighbours, res::fluid_grid, fluid(comp::dt_raw), fluid(comp::active))
         .write(fluid(comp::bin), fluid(comp::ti_end), fluid(comp::dt), res::bin_timeline, res::due_buckets,
-               res::dt, res::drift_bound, counter::woken, counter::limiter_passes, counter::limiter_rows);
+               res::dt, res::drift_bound, res::stepped, counter::woken, counter::limiter_passes,
+               counter::limiter_rows)
+        .rows(res::stepped);
 }
 
 void BinnedStepSystem::register_components(World& w) {
@@ -112,6 +115,8 @@ void BinnedStepSystem::run(Context& ctx) {
     BinTimeline& tl = ctx.write(res::bin_timeline);
     DueBuckets& buckets = ctx.write(res::due_buckets);
     StepSize& s = ctx.write(res::dt);
+    auto& stepped = ctx.write(res::stepped);
+    stepped.clear();
     std::uint64_t woken_count = 0, passes = 0, visited = 0;
     double raw_hi = 0;  // the longest Delta t_i^raw of the step
     if (!set.empty()) {
@@ -348,6 +353,14 @@ void BinnedStepSystem::run(Context& ctx) {
         for (auto& v : woken) cut.insert(cut.end(), v.begin(), v.end());
         std::sort(cut.begin(), cut.end());
         cut.erase(std::unique(cut.begin(), cut.end()), cut.end());
+        // The rows whose Delta t_i is written here (the engine checks those only): the active
+        // set and the woken rows, ascending and each once.
+        if (cut.empty()) {
+            stepped.assign(set.begin(), set.end());
+        } else {
+            stepped.reserve(set.size() + cut.size());
+            std::set_union(set.begin(), set.end(), cut.begin(), cut.end(), std::back_inserter(stepped));
+        }
         for (Index j : cut) {
             const std::uint64_t end = BinTimeline::next_aligned(now, bin[j]);
             dt[j] = tl.seconds(BinTimeline::length(bin[j]));
