@@ -8,13 +8,13 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
-
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
 #include <sstream>
 #include <tuple>
 #include <type_traits>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>  // the domain check's block test (RealBox::any_outside)
+#endif
 
 #include "engine/data/components.hpp"
 #include "engine/core/errors.hpp"
