@@ -78,14 +78,16 @@ std::size_t first_row(std::size_t n, const std::vector<Index>* rows, Bad bad, Bl
         [&](const auto& r, std::size_t best) {
             for (std::size_t b = r.begin(); b < r.end() && b < best; b += kCheckBlock) {
                 const std::size_t e = std::min(r.end(), b + kCheckBlock);
-                bool any = false;
-                if constexpr (!std::is_same_v<BlockBad, std::nullptr_t>) {
-                    if (!rows) any = block_bad(b, e);
-                    else
-                        for (std::size_t k = b; k < e; ++k) any |= bad(row(k));
-                } else {
+                const auto scan = [&] {
+                    bool any = false;
                     for (std::size_t k = b; k < e; ++k) any |= bad(row(k));
-                }
+                    return any;
+                };
+                bool any;
+                if constexpr (std::is_same_v<BlockBad, std::nullptr_t>)
+                    any = scan();
+                else
+                    any = rows ? scan() : block_bad(b, e);
                 if (!any) continue;
                 for (std::size_t k = b; k < e; ++k)
                     if (bad(row(k))) return std::min(best, k);

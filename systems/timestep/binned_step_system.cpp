@@ -355,12 +355,8 @@ void BinnedStepSystem::run(Context& ctx) {
         cut.erase(std::unique(cut.begin(), cut.end()), cut.end());
         // The rows whose Delta t_i is written here (the engine checks those only): the active
         // set and the woken rows, ascending and each once.
-        if (cut.empty()) {
-            stepped.assign(set.begin(), set.end());
-        } else {
-            stepped.reserve(set.size() + cut.size());
-            std::set_union(set.begin(), set.end(), cut.begin(), cut.end(), std::back_inserter(stepped));
-        }
+        stepped.reserve(set.size() + cut.size());
+        std::set_union(set.begin(), set.end(), cut.begin(), cut.end(), std::back_inserter(stepped));
         for (Index j : cut) {
             const std::uint64_t end = BinTimeline::next_aligned(now, bin[j]);
             dt[j] = tl.seconds(BinTimeline::length(bin[j]));
