@@ -12,6 +12,17 @@
 
 namespace sph::test {
 
+/// True in the sanitizer builds of tools/test.sh (stages 2 and 3: GCC defines these macros with
+/// -fsanitize=address or thread), where a whole run takes 10-15x its Release time. The longest
+/// whole-run tests run a shorter stretch of the same scene there (each states its lengths and
+/// why its assertions still hold): the sanitizers check the code a step runs, which the first
+/// steps already run, and stage 1 runs every test at full length.
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+inline constexpr bool kSanitized = true;
+#else
+inline constexpr bool kSanitized = false;
+#endif
+
 /// He et al.'s physics (summation density, Monaghan alpha 0.1, no laminar viscosity, mirrored
 /// walls), which the system and stepping tests built on these scenes were written and measured
 /// against; the engine's own defaults (continuity, alpha 0.01, water's nu) are a scene's when it
