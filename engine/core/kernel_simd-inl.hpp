@@ -84,9 +84,30 @@ HWY_INLINE Broadcast3<D> broadcast3(D d, const Real* xyz) {
     return {hn::Set(d, xyz[0]), hn::Set(d, xyz[1]), hn::Set(d, xyz[2])};
 }
 
-/// @brief The xyz rows `base + 3 j` of a column of Vec3, one gather per component.
+/// @brief The xyz rows `base + 3 j` of a column of Vec3 (`j3` = 3 j; every j a row of the
+/// column), one gather per component; on AVX2 (8 floats), eight 16-byte loads and a transpose
+/// instead, the same values: Zen 3 runs three 8-lane gathers at half that speed
+/// (docs/results/benchmarks.md, "AVX2 rows without gathers").
 template <class D, class VI>
 HWY_INLINE Broadcast3<D> gather3(D d, const Real* base, VI j3) {
+#if HWY_TARGET == HWY_AVX2 && !defined(SPH_DOUBLE)
+    if constexpr (sizeof(hn::Vec<D>) == 32 && sizeof(hn::TFromD<D>) == 4) {
+        // Lane l loads the four floats that end at row j_l's z, base[3 j_l - 1, 3 j_l + 2]: inside
+        // the column for j_l > 0, and read from a copy of row 0 behind a pad for j_l = 0 (also
+        // every masked-off lane). A 4 x 4 transpose in each 128-bit half then gives x, y and z.
+        alignas(32) std::int32_t at[8];
+        hn::Store(j3, hn::RebindToSigned<D>(), at);
+        const float row0[4] = {0.0f, base[0], base[1], base[2]};
+        const auto row = [&](int l) { return _mm_loadu_ps(at[l] ? base + at[l] - 1 : row0); };
+        const auto pair = [&](int l) { return _mm256_insertf128_ps(_mm256_castps128_ps256(row(l)), row(l + 4), 1); };
+        const __m256 r0 = pair(0), r1 = pair(1), r2 = pair(2), r3 = pair(3);
+        const __m256 t0 = _mm256_unpacklo_ps(r0, r1), t1 = _mm256_unpackhi_ps(r0, r1);  // (-, -, x0, x1), (y0, y1, z0, z1)
+        const __m256 t2 = _mm256_unpacklo_ps(r2, r3), t3 = _mm256_unpackhi_ps(r2, r3);
+        return {hn::Vec<D>{_mm256_shuffle_ps(t0, t2, _MM_SHUFFLE(3, 2, 3, 2))},
+                hn::Vec<D>{_mm256_shuffle_ps(t1, t3, _MM_SHUFFLE(1, 0, 1, 0))},
+                hn::Vec<D>{_mm256_shuffle_ps(t1, t3, _MM_SHUFFLE(3, 2, 3, 2))}};
+    }
+#endif
     return {hn::GatherIndex(d, base, j3), hn::GatherIndex(d, base + 1, j3), hn::GatherIndex(d, base + 2, j3)};
 }
 

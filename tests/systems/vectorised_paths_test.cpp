@@ -11,6 +11,8 @@
 #include <cstdio>
 #include <map>
 
+#include "simd_test_targets.hpp"  // before any other Highway header (the engine's target list)
+
 #include "engine/core/simd.hpp"
 #include "engine/data/components.hpp"
 #include "engine/run/simulation.hpp"
@@ -167,23 +169,34 @@ TEST(VectorisedPaths, DispatchesToAVectorTarget) {
     EXPECT_TRUE(target == "AVX3" || target == "AVX2") << "dispatched to " << target;
 }
 
-TEST(VectorisedPaths, GlobalSteppingMatchesScalarWithMovingBody) { compare_paths(SteppingMode::Global); }
-TEST(VectorisedPaths, IndividualSteppingMatchesScalarWithMovingBody) { compare_paths(SteppingMode::Individual); }
+// Each comparison below runs once per vectorised target this CPU runs (test::for_each_simd_target),
+// so that a machine with AVX-512 also checks the AVX2 code (its row loads in place of gathers).
+TEST(VectorisedPaths, GlobalSteppingMatchesScalarWithMovingBody) {
+    test::for_each_simd_target([] { compare_paths(SteppingMode::Global); });
+}
+TEST(VectorisedPaths, IndividualSteppingMatchesScalarWithMovingBody) {
+    test::for_each_simd_target([] { compare_paths(SteppingMode::Individual); });
+}
 // nu = 50 m^2/s (an arithmetic check, not a fluid): with |v_ij| ~ 1 m/s the laminar term,
 // ~ nu |v| / h^2 ~ 3e4 m/s^2, is as large as the jittered block's pressure term, so a wrong
 // coefficient or sign in either path shows in the same bound.
-TEST(VectorisedPaths, LaminarViscosityMatchesScalar) { compare_paths(SteppingMode::Global, 50.0); }
+TEST(VectorisedPaths, LaminarViscosityMatchesScalar) {
+    test::for_each_simd_target([] { compare_paths(SteppingMode::Global, 50.0); });
+}
 // The corrected pressure gradient (Bonet & Lok 1999): the L_j half gathered per pair and the
 // L_i half applied once per row, against the scalar loop's (L_i + L_j)/2 grad W_ij per pair;
 // individual stepping also checks drho/dt, which keeps the uncorrected gradient (He eq. 5).
 TEST(VectorisedPaths, CorrectedGradientMatchesScalar) {
-    compare_paths(SteppingMode::Global, 0, true);
-    compare_paths(SteppingMode::Individual, 0, true);
+    test::for_each_simd_target([] {
+        compare_paths(SteppingMode::Global, 0, true);
+        compare_paths(SteppingMode::Individual, 0, true);
+    });
 }
 
 // PCISPH's pair loops (Ihmsen et al. 2010 eq. 13 predicted density, eq. 6 pressure acceleration
 // with the boundary's density and pressure) on a flowing column 40 steps in, on the same inputs.
-TEST(VectorisedPaths, PcisphDensityAndPressureForceMatchScalar) {
+namespace {
+void pcisph_paths() {
     Scene s = test::tank_scene(Vec3d(0.2, 0.25, 0.1), Vec3d(0.5, 0.3, 0.1));
     s.simulation.method = Method::Pcisph;
     s.simulation.stepping.mode = SteppingMode::Adaptive;
@@ -224,3 +237,6 @@ TEST(VectorisedPaths, PcisphDensityAndPressureForceMatchScalar) {
                 a_max);
     EXPECT_LT(a_dev, 3e-6 * a_max);
 }
+}  // namespace
+
+TEST(VectorisedPaths, PcisphDensityAndPressureForceMatchScalar) { test::for_each_simd_target(pcisph_paths); }

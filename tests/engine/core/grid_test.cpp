@@ -1,9 +1,7 @@
 // The uniform grid's neighbour lists must equal brute force exactly (engine/grid.hpp).
 #include <gtest/gtest.h>
 
-#include "engine/core/simd_targets.hpp"  // the targets the engine compiled, before Highway
-
-#include <hwy/highway.h>
+#include "simd_test_targets.hpp"  // before any other Highway header (the engine's target list)
 
 #include <algorithm>
 #include <random>
@@ -278,25 +276,8 @@ TEST(NeighbourSearch, SubsetRebuildAndCapacityGrowth) {
 // The vectorised filter writes the same lists in the same order as the scalar one (the
 // density and force sums then add the same terms in the same order), with and without the
 // self-exclusion, across a capacity growth.
-// Runs fn once for each vectorised target the engine compiled that this CPU runs (on x86
-// AVX-512, AVX2 and the portable EMU128), forced through Highway's test mock: a machine with
-// AVX-512 checks the AVX2 code too (each target has code of its own: AVX2's compress is ours).
-template <class F>
-void for_each_simd_target(F&& fn) {
-    const std::vector<std::int64_t> targets = hwy::SupportedAndGeneratedTargets();
-    ASSERT_FALSE(targets.empty());
-    for (const std::int64_t target : targets) {
-        SCOPED_TRACE(hwy::TargetName(target));
-        hwy::SetSupportedTargetsForTest(target);
-        hwy::GetChosenTarget().DeInit();  // the next dispatch chooses again, under the mock
-        fn();
-    }
-    hwy::SetSupportedTargetsForTest(0);
-    hwy::GetChosenTarget().DeInit();
-}
-
 TEST(NeighbourSearch, VectorisedFilterEqualsScalarInOrderOnEveryTarget) {
-    for_each_simd_target([] {
+    test::for_each_simd_target([] {
         const Real h = 0.07f;
         auto pts = cloud(4000, h, 7);
         for (Index i = 0; i < 200; ++i) pts[i * 7] = Vec3(0.1f + 0.00005f * i, 0.1f, 0.1f);  // a clump: growth

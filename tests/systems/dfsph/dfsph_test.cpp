@@ -2,6 +2,8 @@
 // against brute force in double, the density solver on a compressed block (eq. 12-13), the
 // divergence solver on a compressing velocity field (eq. 16-17), and a resting column.
 #include <gtest/gtest.h>
+
+#include "simd_test_targets.hpp"  // before any other Highway header (the engine's target list)
 #include <tbb/global_control.h>
 
 #include <cmath>
@@ -277,62 +279,65 @@ TEST(DfsphPaths, VectorisedPassesMatchScalarWithMovingBody) {
     World& w = sim->world();
     ASSERT_TRUE(w.physics.simd);
     ASSERT_GT(w.fluid.size(), 4000u);
-    DfsphFactorSystem factor(true, true, true);
-    w.physics.simd = false;
-    run_system(factor, w);
-    const auto rho = copy(w.fluid.store.get(comp::density)), f = copy(w.fluid.store.get(comp::dfsph_factor));
-    const auto gb = copy(w.fluid.store.get(comp::dfsph_boundary_gradient));
-    const auto flux = copy(w.fluid.store.get(comp::dfsph_boundary_flux));
-    const auto visc = copy(w.fluid.store.get(comp::nonpressure_acceleration));
-    w.physics.simd = true;
-    run_system(factor, w);  // also stores the pair gradients the vectorised passes read
-    const double d_rho = max_rel(w.fluid.store.get(comp::density), rho);
-    const double d_f = max_rel(w.fluid.store.get(comp::dfsph_factor), f);
-    const double d_gb = max_rel(w.fluid.store.get(comp::dfsph_boundary_gradient), gb);
-    const double d_flux = max_rel(w.fluid.store.get(comp::dfsph_boundary_flux), flux);
-    const double d_visc = max_rel(w.fluid.store.get(comp::nonpressure_acceleration), visc);
-    double flux_max = 0;
-    for (const Real x : flux) flux_max = std::max(flux_max, std::abs(double(x)));
-    std::printf("dfsph factor pass: density %.2e, factor %.2e, boundary gradient %.2e, flux %.2e (max %.3g /s), "
-                "viscosity %.2e\n",
-                d_rho, d_f, d_gb, d_flux, flux_max, d_visc);
-    ASSERT_GT(flux_max, 0.1) << "the moving box is not near the fluid: the flux is untested";
-    for (const double d : {d_rho, d_f, d_gb, d_flux, d_visc}) EXPECT_LT(d, 2e-5);
+    // Every vectorised target this CPU runs (test::for_each_simd_target): AVX-512 checks AVX2's too.
+    test::for_each_simd_target([&] {
+        DfsphFactorSystem factor(true, true, true);
+        w.physics.simd = false;
+        run_system(factor, w);
+        const auto rho = copy(w.fluid.store.get(comp::density)), f = copy(w.fluid.store.get(comp::dfsph_factor));
+        const auto gb = copy(w.fluid.store.get(comp::dfsph_boundary_gradient));
+        const auto flux = copy(w.fluid.store.get(comp::dfsph_boundary_flux));
+        const auto visc = copy(w.fluid.store.get(comp::nonpressure_acceleration));
+        w.physics.simd = true;
+        run_system(factor, w);  // also stores the pair gradients the vectorised passes read
+        const double d_rho = max_rel(w.fluid.store.get(comp::density), rho);
+        const double d_f = max_rel(w.fluid.store.get(comp::dfsph_factor), f);
+        const double d_gb = max_rel(w.fluid.store.get(comp::dfsph_boundary_gradient), gb);
+        const double d_flux = max_rel(w.fluid.store.get(comp::dfsph_boundary_flux), flux);
+        const double d_visc = max_rel(w.fluid.store.get(comp::nonpressure_acceleration), visc);
+        double flux_max = 0;
+        for (const Real x : flux) flux_max = std::max(flux_max, std::abs(double(x)));
+        std::printf("dfsph factor pass: density %.2e, factor %.2e, boundary gradient %.2e, flux %.2e (max %.3g /s), "
+                    "viscosity %.2e\n",
+                    d_rho, d_f, d_gb, d_flux, flux_max, d_visc);
+        ASSERT_GT(flux_max, 0.1) << "the moving box is not near the fluid: the flux is untested";
+        for (const double d : {d_rho, d_f, d_gb, d_flux, d_visc}) EXPECT_LT(d, 2e-5);
 
-    for (const DfsphSolver solver : {DfsphSolver::Divergence, DfsphSolver::Density}) {
-        DfsphSourceSystem source(solver, true, true);
-        DfsphPressureSystem pressure(solver, true);
-        DfsphWarmStartSystem warm(solver, true);
-        run_system(warm, w);
-        const auto total0 = copy(w.fluid.store.get(solver == DfsphSolver::Density ? comp::dfsph_kappa_density
-                                                                                    : comp::dfsph_kappa_divergence));
-        const auto v0 = copy(w.fluid.store.get(comp::velocity));
-        const auto k0 = copy(w.fluid.store.get(comp::dfsph_kappa));
-        std::vector<Real> k_out[2];
-        std::vector<Vec3> v_out[2];
-        for (const bool simd : {false, true}) {
-            w.physics.simd = simd;
-            auto total = w.fluid.store.get(solver == DfsphSolver::Density ? comp::dfsph_kappa_density
-                                                                          : comp::dfsph_kappa_divergence);
-            std::copy(total0.begin(), total0.end(), total.begin());
-            std::copy(v0.begin(), v0.end(), w.fluid.store.get(comp::velocity).begin());
-            std::copy(k0.begin(), k0.end(), w.fluid.store.get(comp::dfsph_kappa).begin());
-            run_system(pressure, w);
-            run_system(source, w);
-            k_out[simd] = copy(w.fluid.store.get(comp::dfsph_kappa));
-            v_out[simd] = copy(w.fluid.store.get(comp::velocity));
+        for (const DfsphSolver solver : {DfsphSolver::Divergence, DfsphSolver::Density}) {
+            DfsphSourceSystem source(solver, true, true);
+            DfsphPressureSystem pressure(solver, true);
+            DfsphWarmStartSystem warm(solver, true);
+            run_system(warm, w);
+            const auto total0 = copy(w.fluid.store.get(solver == DfsphSolver::Density ? comp::dfsph_kappa_density
+                                                                                        : comp::dfsph_kappa_divergence));
+            const auto v0 = copy(w.fluid.store.get(comp::velocity));
+            const auto k0 = copy(w.fluid.store.get(comp::dfsph_kappa));
+            std::vector<Real> k_out[2];
+            std::vector<Vec3> v_out[2];
+            for (const bool simd : {false, true}) {
+                w.physics.simd = simd;
+                auto total = w.fluid.store.get(solver == DfsphSolver::Density ? comp::dfsph_kappa_density
+                                                                              : comp::dfsph_kappa_divergence);
+                std::copy(total0.begin(), total0.end(), total.begin());
+                std::copy(v0.begin(), v0.end(), w.fluid.store.get(comp::velocity).begin());
+                std::copy(k0.begin(), k0.end(), w.fluid.store.get(comp::dfsph_kappa).begin());
+                run_system(pressure, w);
+                run_system(source, w);
+                k_out[simd] = copy(w.fluid.store.get(comp::dfsph_kappa));
+                v_out[simd] = copy(w.fluid.store.get(comp::velocity));
+            }
+            double k_max = 0;
+            for (const Real x : k_out[0]) k_max = std::max(k_max, double(x));
+            const double d_k = max_rel(k_out[1], k_out[0]), d_v = max_rel(v_out[1], v_out[0]);
+            std::printf("dfsph %s pass: stiffness %.2e (max %.3g m^2/s^2), velocity %.2e\n",
+                        solver == DfsphSolver::Density ? "density" : "divergence", d_k, k_max, d_v);
+            ASSERT_GT(k_max, 0) << "no stiffness: the pass is untested";
+            // The density source rho/rho0 + dt div - 1 is a difference of numbers near 1 in float
+            // (1e-7 absolute), so its stiffness is compared relative to the largest one at 1e-4.
+            EXPECT_LT(d_k, solver == DfsphSolver::Density ? 1e-4 : 2e-5);
+            EXPECT_LT(d_v, 2e-5);
         }
-        double k_max = 0;
-        for (const Real x : k_out[0]) k_max = std::max(k_max, double(x));
-        const double d_k = max_rel(k_out[1], k_out[0]), d_v = max_rel(v_out[1], v_out[0]);
-        std::printf("dfsph %s pass: stiffness %.2e (max %.3g m^2/s^2), velocity %.2e\n",
-                    solver == DfsphSolver::Density ? "density" : "divergence", d_k, k_max, d_v);
-        ASSERT_GT(k_max, 0) << "no stiffness: the pass is untested";
-        // The density source rho/rho0 + dt div - 1 is a difference of numbers near 1 in float
-        // (1e-7 absolute), so its stiffness is compared relative to the largest one at 1e-4.
-        EXPECT_LT(d_k, solver == DfsphSolver::Density ? 1e-4 : 2e-5);
-        EXPECT_LT(d_v, 2e-5);
-    }
+    });
 }
 
 // scenes/hydrostatic_tank.json (4,500 particles, 0.4 m of water) with method dfsph, 2 s: the
