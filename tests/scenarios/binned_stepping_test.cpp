@@ -284,10 +284,13 @@ TEST(BinnedStepping, WorkCountersAreTheActiveSet) {
 // margin measured (to t = 0.6 s: `binned` 44 sorts in 2,028 steps against 127, 0.35 of them;
 // `individual`, busier, 51 in 1,173 against 74, 0.69; bounds 0.5 and 0.8). Under the sanitizers
 // (test::kSanitized) to 0.3 s: measured in the ASan build, `binned` 21 sorts against 58 (0.36),
-// `individual` 24 against 32 (0.75).
+// `individual` 24 against 32 (0.75), so `individual`'s bound is 0.9 there: the sort count moves
+// with the rounding of the SIMD target (AVX2 or AVX-512), and 0.8 left one sort of margin.
 TEST(BinnedStepping, SortFollowsTheRowsEvaluated) {
     const double end = test::kSanitized ? 0.3 : 0.6;
-    for (const auto& [mode, most] : {std::pair{SteppingMode::Binned, 0.5}, std::pair{SteppingMode::Individual, 0.8}}) {
+    const double individual_most = test::kSanitized ? 0.9 : 0.8;
+    for (const auto& [mode, most] :
+         {std::pair{SteppingMode::Binned, 0.5}, std::pair{SteppingMode::Individual, individual_most}}) {
         Scene s = with_mode(load_scene(SPH_SOURCE_DIR "/scenes/dam_break.json"), mode, false);
         s.simulation.sort_interval = 16;
         auto sim = make_simulation(s);
