@@ -139,7 +139,10 @@ INSTANTIATE_TEST_SUITE_P(AdaptiveModes, MartinMoyce, ::testing::ValuesIn(modes()
 // 5 % at each (one run each). The residual height error falls with resolution: over six runs
 // per spacing with the acoustic CFL coefficient spread over 0.36 ... 0.44 (the step sequence
 // changes, the model does not; tools/resolution_study.py's default perturbation), the median of
-// max |d eta| at a/18 is below that at a/8, and every a/18 run is within 0.05.
+// max |d eta| at a/18 is below that at a/8 and within 0.05. The median, not every run: one run's
+// eta error is a chaotic sample that a change of rounding alone moves by up to three particle
+// layers (0.022 to 0.078 in `global` at a/18 over sort intervals 13-18 on an AVX2 machine, where
+// these six read 0.012-0.024; docs/results/validation.md), as MartinMoyce.* above asserts it.
 TEST(MartinMoyceResolution, FrontWithinFivePercentAndResidualHeightErrorFalls) {
     std::vector<double> median_eta;
     for (const double n : {8.0, 12.0, 18.0}) {
@@ -161,9 +164,7 @@ TEST(MartinMoyceResolution, FrontWithinFivePercentAndResidualHeightErrorFalls) {
         median_eta.push_back(0.5 * (eta[2] + eta[3]));
         std::printf("  a/%.0f, lambda_c 0.36 ... 0.44: max |d eta| %.3f %.3f %.3f %.3f %.3f %.3f, median %.3f\n", n,
                     eta[0], eta[1], eta[2], eta[3], eta[4], eta[5], median_eta.back());
-        if (n == 18.0) {
-            EXPECT_LE(eta.back(), 0.05) << "every a/18 run";
-        }
+        if (n == 18.0) EXPECT_LE(median_eta.back(), 0.05) << "median of the six a/18 runs";
     }
     EXPECT_LT(median_eta[1], median_eta[0]) << "median max |d eta|: a/18 against a/8";
 }
