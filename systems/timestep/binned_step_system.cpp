@@ -8,8 +8,8 @@
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
-#include <iterator>
 #include <limits>
 
 #include "engine/core/grid.hpp"
@@ -69,30 +69,67 @@ void cell_bounds(const UniformGrid& grid, std::span<const std::uint8_t> bin, std
     });
 }
 
-/// The rows i with keep(i, B) into `rows`, B the cell bounds folded over the 27 cells around i's
-/// (every row within a fresh grid's search of i lies in them).
-template <class Fold, class Keep>
-void rows_by_cell(const UniformGrid& grid, const std::vector<std::uint8_t>& bounds, std::uint8_t init, Fold fold,
-                  Keep keep, std::vector<Index>& rows) {
-    const Eigen::Vector3i d = grid.dims();
+/// `out[c]` = `in` folded by `fold` over the 3 x 3 x 3 cells around c (clamped at the grid's
+/// faces), separably: along x, then y, then z, each pass one sequential read of the cells
+/// (`tmp` holds the middle pass). A max (min) is the largest (smallest) over the block.
+template <class Fold>
+void fold_blocks(const Eigen::Vector3i& d, const std::vector<std::uint8_t>& in, Fold fold, std::vector<std::uint8_t>& tmp,
+                 std::vector<std::uint8_t>& out) {
+    const std::size_t nx = std::size_t(d[0]), ny = std::size_t(d[1]), nz = std::size_t(d[2]);
+    const std::size_t lines = ny * nz, grain = std::max<std::size_t>(1, 4096 / nx);
+    tmp.resize(in.size());
+    out.resize(in.size());
+    // x: within each line of cells.
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, lines, grain), [&](const auto& r) {
+        for (std::size_t l = r.begin(); l < r.end(); ++l) {
+            const std::uint8_t* a = in.data() + l * nx;
+            std::uint8_t* o = out.data() + l * nx;
+            for (std::size_t x = 0; x < nx; ++x) {
+                std::uint8_t v = a[x];
+                if (x > 0) v = fold(v, a[x - 1]);
+                if (x + 1 < nx) v = fold(v, a[x + 1]);
+                o[x] = v;
+            }
+        }
+    });
+    // y, then z: a line folded with its neighbour lines, element by element.
+    const auto across = [&](const std::vector<std::uint8_t>& src, std::vector<std::uint8_t>& dst, std::size_t stride,
+                            std::size_t extent, std::size_t period) {
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, lines, grain), [&](const auto& r) {
+            for (std::size_t l = r.begin(); l < r.end(); ++l) {
+                const std::size_t pos = l / period % extent;  // the line's y (period 1) or z (period ny)
+                const std::uint8_t* a = src.data() + l * nx;
+                const std::uint8_t* below = pos > 0 ? a - stride : a;
+                const std::uint8_t* above = pos + 1 < extent ? a + stride : a;
+                std::uint8_t* o = dst.data() + l * nx;
+                for (std::size_t x = 0; x < nx; ++x) o[x] = fold(fold(a[x], below[x]), above[x]);
+            }
+        });
+    };
+    across(out, tmp, nx, ny, 1);
+    across(tmp, out, nx * ny, nz, ny);
+}
+
+/// The rows i with keep(i, B) into `rows`, B = block[cell of i]: a cell bound folded over the 27
+/// cells around i's (fold_blocks; every row within a fresh grid's search of i lies in them). A
+/// cell whose B fails `may` (no row of any bin could be kept) is not read.
+template <class May, class Keep>
+void rows_by_cell(const UniformGrid& grid, const std::vector<std::uint8_t>& block, May may, Keep keep,
+                  std::vector<Index>& rows) {
     const auto slots = grid.sorted_index();
     tbb::enumerable_thread_specific<std::vector<Index>> found;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, grid.cell_count(), 4096), [&](const auto& r) {
         auto& out = found.local();
+        Index k = grid.cell_start(std::int64_t(r.begin()));
         for (std::size_t c = r.begin(); c < r.end(); ++c) {
-            const Index b = grid.cell_start(std::int64_t(c)), e = grid.cell_start(std::int64_t(c + 1));
-            if (b == e) continue;
-            const int x = int(c % std::size_t(d[0])), y = int(c / std::size_t(d[0]) % std::size_t(d[1])),
-                      z = int(c / (std::size_t(d[0]) * std::size_t(d[1])));
-            const int x0 = std::max(x - 1, 0), x1 = std::min(x + 1, d[0] - 1);
-            std::uint8_t v = init;
-            for (int cz = std::max(z - 1, 0); cz <= std::min(z + 1, d[2] - 1); ++cz)
-                for (int cy = std::max(y - 1, 0); cy <= std::min(y + 1, d[1] - 1); ++cy) {
-                    const std::size_t row = std::size_t(grid.cell_index({0, cy, cz}));
-                    for (std::size_t k = row + std::size_t(x0); k <= row + std::size_t(x1); ++k) v = fold(v, bounds[k]);
-                }
-            for (Index k = b; k < e; ++k)
-                if (keep(slots[k], int(v))) out.push_back(slots[k]);
+            const Index e = grid.cell_start(std::int64_t(c + 1));
+            const int v = block[c];
+            if (!may(v)) {
+                k = e;
+                continue;
+            }
+            for (; k < e; ++k)
+                if (keep(slots[k], v)) out.push_back(slots[k]);
         }
     });
     rows.clear();
@@ -302,7 +339,10 @@ void BinnedStepSystem::run(Context& ctx) {
             // over i's list, at the bins of the moment; a row lowered here pushes below, so every
             // pair ends within 2 bins (the bounds need not hold once bins fall: what falls pushes).
             cell_bounds(grid, bin, 255, kMin, m_cell_lo);
-            rows_by_cell(grid, m_cell_lo, 255, kMin, [&](Index i, int low) { return bin[i] > low + 2; }, m_pull);
+            fold_blocks(grid.dims(), m_cell_lo, kMin, m_block_tmp, m_block);
+            rows_by_cell(
+                grid, m_block, [&](int low) { return hi_raw > low + 2; }, [&](Index i, int low) { return bin[i] > low + 2; },
+                m_pull);
             tbb::enumerable_thread_specific<std::vector<Index>> lowered;
             tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m_pull.size(), kGrain), [&](const auto& r) {
                 auto& out = lowered.local();
@@ -322,50 +362,73 @@ void BinnedStepSystem::run(Context& ctx) {
         } else if (dense) {
             push_limit();
         } else {
-            if (wake_by_cells) cell_bounds(grid, bin, 0, kMax, m_cell_hi);  // an upper bound from here on: bins only fall
+            if (wake_by_cells) {  // an upper bound from here on: bins only fall
+                cell_bounds(grid, bin, 0, kMax, m_cell_hi);
+                fold_blocks(grid.dims(), m_cell_hi, kMax, m_block_tmp, m_block);
+            }
             limit();
             for (;;) {
                 if (wake_by_cells)  // the only active rows with a neighbour the wake-up may lower
-                    rows_by_cell(grid, m_cell_hi, 0, kMax, [&](Index i, int high) { return active[i] && bin[i] + 2 < high; },
-                                 m_wake);
+                    rows_by_cell(
+                        grid, m_block, [&](int high) { return lo + 2 < high; },
+                        [&](Index i, int high) { return active[i] && bin[i] + 2 < high; }, m_wake);
                 if (!wake() || !limit()) break;
             }
         }
-        // 4. New ends. Active particles: a whole step of their bin from now, filed by bin (at
-        // most max_bin + 1 buckets touched, each appended once, in ascending row order). Woken
-        // ones: the first multiple of their new bin's step after now (never after their old end).
-        for (Filed& f : m_filed) {
-            for (auto& v : f.by_bin) v.clear();
-            f.hi = 0;
-        }
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, set.size(), kGrain), [&](const auto& r) {
-            Filed& f = m_filed.local();
-            for (std::size_t k = r.begin(); k < r.end(); ++k) {
-                const Index i = set[k];
-                const int b = bin[i];
-                f.hi = std::max(f.hi, b);
-                ti_end[i] = now + BinTimeline::length(b);
-                dt[i] = tl.seconds(BinTimeline::length(b));
-                f.by_bin[b].push_back(i);
+        // 4. New ends. Active particles: a whole step of their bin from now, filed by bin in
+        // ascending row order: each fixed chunk of the set counts its rows per bin, and then
+        // writes them at its offset in the bin's bucket (at most max_bin + 1 buckets touched,
+        // each grown once). Woken ones: the first multiple of their new bin's step after now
+        // (never after their old end).
+        const std::size_t chunks = (set.size() + kGrain - 1) / kGrain;
+        constexpr std::size_t kBins = BinTimeline::kMaxBin + 1;
+        m_counts.assign(chunks * kBins, 0);
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, chunks), [&](const auto& r) {
+            for (std::size_t ch = r.begin(); ch < r.end(); ++ch) {
+                Index* count = m_counts.data() + ch * kBins;
+                for (std::size_t k = ch * kGrain, e = std::min(set.size(), k + kGrain); k < e; ++k) {
+                    const Index i = set[k];
+                    const int b = bin[i];
+                    ti_end[i] = now + BinTimeline::length(b);
+                    dt[i] = tl.seconds(BinTimeline::length(b));
+                    ++count[b];
+                }
             }
         });
-        // Appended in thread order: a bucket is ascending runs, merged when it is taken.
-        for (Filed& f : m_filed) {
-            buckets.bin_hi = std::max(buckets.bin_hi, f.hi);
-            for (std::size_t b = 0; b < f.by_bin.size(); ++b) {
-                if (f.by_bin[b].empty()) continue;
-                auto& v = buckets.due[now + BinTimeline::length(int(b))];
-                v.insert(v.end(), f.by_bin[b].begin(), f.by_bin[b].end());
+        // Each chunk's first slot per bin (the counts become offsets), and the buckets grown.
+        std::array<Index*, kBins> bucket{};
+        for (std::size_t b = 0; b < kBins; ++b) {
+            Index total = 0;
+            for (std::size_t ch = 0; ch < chunks; ++ch) {
+                const Index c = m_counts[ch * kBins + b];
+                m_counts[ch * kBins + b] = total;
+                total += c;
             }
+            if (total == 0) continue;
+            buckets.bin_hi = std::max(buckets.bin_hi, int(b));
+            auto& v = buckets.due[now + BinTimeline::length(int(b))];
+            const std::size_t base = v.size();
+            v.resize(base + total);
+            bucket[b] = v.data() + base;
         }
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, chunks), [&](const auto& r) {
+            for (std::size_t ch = r.begin(); ch < r.end(); ++ch) {
+                Index* next = m_counts.data() + ch * kBins;
+                for (std::size_t k = ch * kGrain, e = std::min(set.size(), k + kGrain); k < e; ++k) {
+                    const int b = bin[set[k]];
+                    bucket[std::size_t(b)][next[b]++] = set[k];
+                }
+            }
+        });
         std::vector<Index> cut;
         for (auto& v : woken) cut.insert(cut.end(), v.begin(), v.end());
         std::sort(cut.begin(), cut.end());
         cut.erase(std::unique(cut.begin(), cut.end()), cut.end());
         // The rows whose Delta t_i is written here (the engine checks those only): the active
         // set and the woken rows, ascending and each once.
-        stepped.reserve(set.size() + cut.size());
-        std::set_union(set.begin(), set.end(), cut.begin(), cut.end(), std::back_inserter(stepped));
+        stepped.resize(set.size() + cut.size());
+        stepped.resize(std::size_t(std::set_union(set.begin(), set.end(), cut.begin(), cut.end(), stepped.begin()) -
+                                   stepped.begin()));
         for (Index j : cut) {
             const std::uint64_t end = BinTimeline::next_aligned(now, bin[j]);
             dt[j] = tl.seconds(BinTimeline::length(bin[j]));

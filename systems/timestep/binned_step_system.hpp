@@ -20,9 +20,6 @@
 ///    earliest end with a live entry (stale entries of woken particles are dropped there),
 ///    clipped to the run's end and frame times by the engine.
 /// Afterwards, for every active i and every j in i's list, |bin_i - bin_j| <= 2.
-#include <tbb/enumerable_thread_specific.h>
-
-#include <array>
 #include <vector>
 
 #include "engine/core/timeline.hpp"
@@ -58,16 +55,12 @@ public:
     void run(Context& ctx) override;
 
 private:
-    /// One thread's share of a step's active rows, by new bin (kept to reuse the storage).
-    struct Filed {
-        std::array<std::vector<Index>, BinTimeline::kMaxBin + 1> by_bin;
-        int hi = 0;
-    };
     double m_dt_min, m_dt_max, m_headroom;
-    tbb::enumerable_thread_specific<Filed> m_filed;
+    std::vector<Index> m_counts;  ///< filing: rows per (chunk of the active set, new bin), then offsets
     std::vector<Index> m_limit, m_wake;           ///< active rows the limiter / wake-up must visit
     std::vector<Index> m_pull;                    ///< every row due: the rows the limiter pulls at
     std::vector<std::uint8_t> m_cell_lo, m_cell_hi;  ///< per grid cell: the smallest / largest bin of its rows
+    std::vector<std::uint8_t> m_block, m_block_tmp;  ///< per grid cell: a bound folded over its 27 cells (and scratch)
 };
 
 }  // namespace sph
