@@ -76,9 +76,10 @@ template <class Fold>
 void fold_blocks(const Eigen::Vector3i& d, const std::vector<std::uint8_t>& in, Fold fold, std::vector<std::uint8_t>& tmp,
                  std::vector<std::uint8_t>& out) {
     const std::size_t nx = std::size_t(d[0]), ny = std::size_t(d[1]), nz = std::size_t(d[2]);
-    const std::size_t lines = ny * nz, grain = std::max<std::size_t>(1, 4096 / nx);
     tmp.resize(in.size());
     out.resize(in.size());
+    if (in.empty()) return;
+    const std::size_t lines = ny * nz, grain = std::max<std::size_t>(1, 4096 / nx);
     // x: within each line of cells.
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, lines, grain), [&](const auto& r) {
         for (std::size_t l = r.begin(); l < r.end(); ++l) {
