@@ -111,6 +111,15 @@ void fold_blocks(const Eigen::Vector3i& d, const std::vector<std::uint8_t>& in, 
     across(tmp, out, nx * ny, nz, ny);
 }
 
+/// Per cell of `grid`: the bins of the rows in its 3 x 3 x 3 block folded by `fold` from `init`
+/// (cell_bounds, then fold_blocks; `cell` and `tmp` are scratch).
+template <class Fold>
+void block_bounds(const UniformGrid& grid, std::span<const std::uint8_t> bin, std::uint8_t init, Fold fold,
+                  std::vector<std::uint8_t>& cell, std::vector<std::uint8_t>& tmp, std::vector<std::uint8_t>& out) {
+    cell_bounds(grid, bin, init, fold, cell);
+    fold_blocks(grid.dims(), cell, fold, tmp, out);
+}
+
 /// The rows i with keep(i, B) into `rows`, B = block[cell of i]: a cell bound folded over the 27
 /// cells around i's (fold_blocks; every row within a fresh grid's search of i lies in them). A
 /// cell whose B fails `may` (no row of any bin could be kept) is not read.
@@ -339,8 +348,7 @@ void BinnedStepSystem::run(Context& ctx) {
             // Pulled at the rows above their cells' lower bound + 2: bin_i = min(bin_i, bin_j + 2)
             // over i's list, at the bins of the moment; a row lowered here pushes below, so every
             // pair ends within 2 bins (the bounds need not hold once bins fall: what falls pushes).
-            cell_bounds(grid, bin, 255, kMin, m_cell_lo);
-            fold_blocks(grid.dims(), m_cell_lo, kMin, m_block_tmp, m_block);
+            block_bounds(grid, bin, 255, kMin, m_cell, m_block_tmp, m_block);
             rows_by_cell(
                 grid, m_block, [&](int low) { return hi_raw > low + 2; }, [&](Index i, int low) { return bin[i] > low + 2; },
                 m_pull);
@@ -363,10 +371,8 @@ void BinnedStepSystem::run(Context& ctx) {
         } else if (dense) {
             push_limit();
         } else {
-            if (wake_by_cells) {  // an upper bound from here on: bins only fall
-                cell_bounds(grid, bin, 0, kMax, m_cell_hi);
-                fold_blocks(grid.dims(), m_cell_hi, kMax, m_block_tmp, m_block);
-            }
+            if (wake_by_cells)  // an upper bound from here on: bins only fall
+                block_bounds(grid, bin, 0, kMax, m_cell, m_block_tmp, m_block);
             limit();
             for (;;) {
                 if (wake_by_cells)  // the only active rows with a neighbour the wake-up may lower

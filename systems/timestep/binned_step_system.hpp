@@ -59,8 +59,9 @@ private:
     std::vector<Index> m_counts;  ///< filing: rows per (chunk of the active set, new bin), then offsets
     std::vector<Index> m_limit, m_wake;           ///< active rows the limiter / wake-up must visit
     std::vector<Index> m_pull;                    ///< every row due: the rows the limiter pulls at
-    std::vector<std::uint8_t> m_cell_lo, m_cell_hi;  ///< per grid cell: the smallest / largest bin of its rows
-    std::vector<std::uint8_t> m_block, m_block_tmp;  ///< per grid cell: a bound folded over its 27 cells (and scratch)
+    /// Per grid cell: the smallest (limiter) or largest (wake-up) bin of the rows in its 27
+    /// cells, and the scratch that computes it.
+    std::vector<std::uint8_t> m_block, m_cell, m_block_tmp;
 };
 
 }  // namespace sph
