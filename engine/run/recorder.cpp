@@ -409,6 +409,13 @@ nlohmann::json Recorder::finish(const Simulation& sim, double wall_seconds, int 
     j["max_avg_density_error"] = m_rho_err_avg_max;
     j["shocks"] = w.clock.rollbacks;
     j["kept_steps"] = m_steps;
+    // The step conditions the run used (docs/usage.md, summary.json): tools/stepping_bound.py
+    // reads them with stats.csv's dt and v_max.
+    {
+        const SteppingParams& sp = w.scene.simulation.stepping;
+        j["stepping_params"] = {{"lambda_v", sp.lambda_v}, {"lambda_f", sp.lambda_f}, {"acoustic", sp.acoustic},
+                                {"lambda_c", sp.lambda_c}, {"dt_max", sp.dt_max},   {"dt_min", sp.dt_min}};
+    }
     // What each system adds (a method's own figures, System::summarise).
     RunTotals totals;
     totals.kept_steps = m_steps;
