@@ -37,6 +37,17 @@ for r in rows:
     assert not wcsph or 0 <= int(r["droplet_contacts"]) <= int(r["net_catches"]), r
 md = (d / "study.md").read_text()
 assert md.count("\n| ") == 10 and "exp. err front" in md and "2 threads" in md, md
+# The sound-crossing bound (tools/stepping_bound.py): WCSPH rows with the acoustic condition only
+# (`individual` is He's scheme, without it); `global`'s steps divided by the evaluations at the
+# bound, at least 1 (no step past its acoustic bound), noted under the table.
+for r in rows:
+    acoustic = r["configuration"] in ("constant", "global", "binned")
+    assert (r["evaluations / sound-crossing bound"] != "") == acoustic, r
+gr = rows[1]
+e = float(gr["evaluations per particle at the sound-crossing bound"])
+assert abs(float(gr["evaluations / sound-crossing bound"]) - g["steps"] / e) < 1e-9 * g["steps"], gr
+assert float(gr["evaluations / sound-crossing bound"]) >= 1 - 1e-6, gr
+assert f"* global: per-particle stepping at the same λc could be at most {g['steps'] / e:.2f}× faster" in md, md
 for png in ("pareto.png", "dt.png"):
     b = (d / png).read_bytes()
     assert b[:8] == b"\x89PNG\r\n\x1a\n" and len(b) > 10000, png

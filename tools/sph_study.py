@@ -13,7 +13,10 @@ parallel, so that wall times compare), and writes into --out:
                         average/minimum/maximum dt; average active %; speed-up over `global` and
                         over `constant`; average and maximum density error; RMS deviation from a
                         reference run of every probe series and of the kinetic energy; error
-                        against the experiment for probes that declare one.
+                        against the experiment for probes that declare one. For WCSPH runs with
+                        the acoustic condition, the evaluations per particle at the sound-crossing
+                        bound (tools/stepping_bound.py), and under the table for `global` and
+                        `constant` what per-particle stepping could at most gain over them.
   pareto.png            wall time against error, one point per configuration, the front of
                         non-dominated configurations joined and marked.
   dt.png                dt_sim (log) and active fraction over time of every run, overlaid
@@ -58,6 +61,7 @@ import time
 # first on the path so that loading this file as a module (tools that import it, the tests) finds it too.
 sys.path.insert(0, os.path.dirname(os.path.realpath(__file__)))
 from sph_python import need  # noqa: E402
+import stepping_bound  # noqa: E402
 
 need("numpy")
 import numpy as np  # noqa: E402
@@ -487,6 +491,14 @@ def main():
             err, shift = experiment_error(r["_dir"], p, scene_dir)
             row[f"exp err {p['name']} %"] = 100 * err
             row[f"exp shift {p['name']}"] = shift
+        # What per-particle stepping could at most gain over this run at its lambda_c
+        # (tools/stepping_bound.py): WCSPH with the acoustic condition only.
+        try:
+            b = stepping_bound.bound(r["_dir"])
+            row["evaluations per particle at the sound-crossing bound"] = b["acoustic_evaluations_per_particle"]
+            row["evaluations / sound-crossing bound"] = b["ratio"]
+        except stepping_bound.BadInput:
+            pass
         wave = wave_figures(r["_dir"], study.fluid_probe, r, study.scene_json)
         if wave:
             row["wave period s"] = wave["period_s"]
@@ -539,6 +551,14 @@ def main():
                       f"{row['wave decay 1/s']:.4f} ({row['wave decay / theory']:.2f})" if "wave period s" in row else ""]
         lines.append("| " + " | ".join(cells) + " |")
     notes = [f"* {c['label']}: {c['note']}" for c in configs if c.get("note")]
+    for row in rows:
+        if row["status"] == "ok" and row["mode"] in ("global", "constant") and \
+                "evaluations / sound-crossing bound" in row:
+            notes.append(f"* {row['configuration']}: per-particle stepping at the same λc could be at most "
+                         f"{row['evaluations / sound-crossing bound']:.2f}× faster than this run (its {row['steps']:,} "
+                         f"evaluations per particle against "
+                         f"{row['evaluations per particle at the sound-crossing bound']:,.0f} at the sound-crossing "
+                         f"bound; tools/stepping_bound.py)")
     theory = next((row["wave theory"] for row in rows if "wave theory" in row), None)
     if theory:
         notes.append(f"* standing wave, linear theory: {theory} (ν of the first run; each row's ratio uses its own); measured from the fluid "
