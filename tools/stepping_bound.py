@@ -3,18 +3,23 @@
 
 Reads an `sph-run` output folder (summary.json, stats.csv) and prints
 
-* E, the evaluations per particle a particle would need if it stepped, all run long, at exactly
-  the sound-crossing bound the run used: E = sum_k dt_k / dt_c,k with
-  dt_c,k = min(dt_max, Morris et al. 1997 eq. 12, lambda_c h / (c_s + v_max,k)), the bound the
-  step-size system put on step k (v_max,k is the row's: the statistics the step was sized from);
+* E0, the fewest evaluations per particle any stepping that keeps the acoustic condition can
+  make over the run's simulated time T: a particle i may step at most
+  min(dt_max, Morris et al. 1997 eq. 12, lambda_c h / (c_s + |v_i|)) (the per-particle bound of
+  systems/forces/forces_system.cpp; StepBound in systems/timestep/global_dt_system.hpp), which
+  is never longer than dt_c = min(dt_max, Morris, lambda_c h / c_s), so it is evaluated at least
+  E0 = T / dt_c times. (With each particle's own speed the figure would be larger by the factor
+  1 + mean |v| / c_s, a few per cent in the scenes here; stats.csv holds only the largest speed.)
 * the evaluations per particle the run made (the sum over steps of the share evaluated);
-* their ratio. For a `global` or `constant` run it bounds the speed-up of any per-particle
-  stepping (`binned`, `individual`) at the same lambda_c over this run: even with no bookkeeping,
-  no particle may step past its sound-crossing bound, so every particle is evaluated at least E
-  times. For a `binned` run it says how far its evaluations lie above that ideal (power-of-two
-  bins, the limiter, the fast particles); its v_max is over the rows evaluated in each step.
+* their ratio. For a `global` or `constant` run it bounds the ratio of evaluations by which any
+  per-particle stepping (`binned`, `individual`) at the same lambda_c can undercut the run, and
+  so its speed-up as long as a step over a subset costs at least what `global` pays per
+  evaluation (measured: it costs more). For a `binned` run it says how far its evaluations lie
+  above that ideal (power-of-two bins, the limiter, the fast particles).
 
-docs/methods.md ("Binned stepping") and docs/results/he_table1.md use it.
+docs/methods.md ("Binned stepping") and docs/results/he_table1.md use it. Bad input (no
+folder, not an sph-run summary, not WCSPH, the acoustic condition off, a stats.csv that holds
+fewer steps than the run kept, e.g. after a resume into a new folder) exits 2 naming the file.
 
 Usage: tools/stepping_bound.py RUN_DIR [RUN_DIR ...]
 """
@@ -29,42 +34,56 @@ class BadInput(Exception):
 
 def bound(run_dir):
     """The figures of one run folder (a dict); BadInput when it cannot be used."""
+    where = f"{run_dir}/summary.json"
     try:
-        with open(f"{run_dir}/summary.json") as f:
+        with open(where) as f:
             s = json.load(f)
-    except (OSError, ValueError) as e:
-        raise BadInput(f"{run_dir}/summary.json: {e}") from None
-    if s.get("method") != "wcsph":
-        raise BadInput(f"{run_dir}/summary.json: method {s.get('method')!r}: the bound is for WCSPH runs")
-    sp = s.get("stepping_params")
-    if sp is None:
-        raise BadInput(f"{run_dir}/summary.json: no 'stepping_params' (written by sph-run since 2026-12-06)")
-    try:
+        if s.get("method") != "wcsph":
+            raise BadInput(f"{where}: method {s.get('method')!r}: the bound is for WCSPH runs")
+        sp = s["stepping_params"]
         ph = s["physics"]
-        h, c, nu = ph["support_radius"], ph["speed_of_sound"], ph["kinematic_viscosity"]
-        cap, lch, acoustic = sp["dt_max"], sp["lambda_c"] * h, sp["acoustic"]
-    except (KeyError, TypeError) as e:
-        raise BadInput(f"{run_dir}/summary.json: no {e} (expected sph-run's summary)") from None
+        h, c, nu = float(ph["support_radius"]), float(ph["speed_of_sound"]), float(ph["kinematic_viscosity"])
+        dt_max, lambda_c, acoustic = float(sp["dt_max"]), float(sp["lambda_c"]), bool(sp["acoustic"])
+        stepping, kept = str(s["stepping"]), int(s["kept_steps"])
+    except BadInput:
+        raise
+    except OSError as e:
+        raise BadInput(f"{where}: {e.strerror or e}") from None
+    except (ValueError, KeyError, TypeError, AttributeError) as e:
+        raise BadInput(f"{where}: {e!r} (expected sph-run's summary with physics and stepping_params, "
+                       "which sph-run writes since 2026-12-06)") from None
     if not acoustic:
-        raise BadInput(f"{run_dir}/summary.json: the acoustic condition is off, so no step has a sound-crossing bound")
+        raise BadInput(f"{where}: the acoustic condition is off, so no step has a sound-crossing bound")
+    if not (h > 0 and c > 0 and lambda_c > 0 and dt_max > 0 and nu >= 0):
+        raise BadInput(f"{where}: support_radius {h}, speed_of_sound {c}, lambda_c {lambda_c}, dt_max {dt_max} "
+                       f"and kinematic_viscosity {nu}: expected positive values (nu >= 0)")
+    dt_c = min(dt_max, lambda_c * h / c)
     if nu > 0:
-        cap = min(cap, 0.125 * (0.5 * h) ** 2 / nu)  # Morris et al. 1997 eq. 12, as the step-size systems
-    ideal = made = 0.0
+        dt_c = min(dt_c, 0.125 * (0.5 * h) ** 2 / nu)  # Morris et al. 1997 eq. 12, as StepBound
+    where = f"{run_dir}/stats.csv"
+    t = made = 0.0
     steps = 0
     try:
-        with open(f"{run_dir}/stats.csv") as f:
+        with open(where) as f:
             for row in csv.DictReader(f):
                 if row.get("rolled_back", "0") not in ("0", ""):
-                    continue
-                ideal += float(row["dt"]) / min(cap, lch / (c + float(row["v_max"])))
+                    continue  # a discarded step (PCISPH's rollback; WCSPH has none) is not in kept_steps
+                t += float(row["dt"])
                 made += float(row["active_fraction"])
                 steps += 1
-    except (OSError, KeyError, ValueError, TypeError) as e:
-        raise BadInput(f"{run_dir}/stats.csv: {e!r} (expected sph-run's stats.csv with dt, v_max, active_fraction)") from None
-    if steps == 0 or ideal <= 0:
-        raise BadInput(f"{run_dir}/stats.csv: no steps")
-    return {"run": run_dir, "stepping": s["stepping"], "lambda_c": sp["lambda_c"], "steps": steps,
-            "evaluations_per_particle": made, "acoustic_evaluations_per_particle": ideal, "ratio": made / ideal}
+    except OSError as e:
+        raise BadInput(f"{where}: {e.strerror or e}") from None
+    except (KeyError, ValueError, TypeError) as e:
+        raise BadInput(f"{where}: {e!r} (expected sph-run's stats.csv with dt and active_fraction)") from None
+    if steps == 0 or not t > 0:
+        raise BadInput(f"{where}: no steps")
+    if steps != kept:
+        raise BadInput(f"{where}: holds {steps} steps of the run's {kept} (a run resumed into another folder? "
+                       "use the folder that holds every step)")
+    ideal = t / dt_c
+    return {"run": run_dir, "stepping": stepping, "lambda_c": lambda_c, "steps": steps, "simulated_s": t,
+            "dt_c": dt_c, "evaluations_per_particle": made, "bound_evaluations_per_particle": ideal,
+            "ratio": made / ideal}
 
 
 def main(argv):
@@ -77,11 +96,11 @@ def main(argv):
         except BadInput as e:
             print(f"stepping_bound.py: {e}", file=sys.stderr)
             return 2
-        what = ("speed-up bound for per-particle stepping" if b["stepping"] in ("global", "constant")
-                else "evaluations above the acoustic ideal")
-        print(f"{b['run']}: {b['stepping']}, lambda_c {b['lambda_c']:g}, {b['steps']} steps; evaluations per particle "
-              f"{b['evaluations_per_particle']:.0f}, at the sound-crossing bound {b['acoustic_evaluations_per_particle']:.0f}; "
-              f"{what}: {b['ratio']:.3f}")
+        what = ("bound on per-particle stepping's evaluation ratio" if b["stepping"] in ("global", "constant")
+                else "evaluations above that ideal")
+        print(f"{b['run']}: {b['stepping']}, lambda_c {b['lambda_c']:g}, {b['steps']} steps over {b['simulated_s']:g} s; "
+              f"evaluations per particle {b['evaluations_per_particle']:.0f}, at the sound-crossing bound "
+              f"({1e3 * b['dt_c']:.4g} ms) {b['bound_evaluations_per_particle']:.0f}; {what}: {b['ratio']:.3f}")
     return 0
 
 
