@@ -65,9 +65,7 @@ def bound(run_dir):
     steps = 0
     try:
         with open(where) as f:
-            for row in csv.DictReader(f):
-                if row.get("rolled_back", "0") not in ("0", ""):
-                    continue  # a discarded step (PCISPH's rollback; WCSPH has none) is not in kept_steps
+            for row in csv.DictReader(f):  # WCSPH: every row is a kept step (no rollback)
                 t += float(row["dt"])
                 made += float(row["active_fraction"])
                 steps += 1

@@ -410,7 +410,7 @@ nlohmann::json Recorder::finish(const Simulation& sim, double wall_seconds, int 
     j["shocks"] = w.clock.rollbacks;
     j["kept_steps"] = m_steps;
     // The step conditions the run used (docs/usage.md, summary.json): tools/stepping_bound.py
-    // reads them with stats.csv's dt and v_max.
+    // reads them with stats.csv's dt and active_fraction.
     {
         const SteppingParams& sp = w.scene.simulation.stepping;
         j["stepping_params"] = {{"lambda_v", sp.lambda_v}, {"lambda_f", sp.lambda_f}, {"acoustic", sp.acoustic},
