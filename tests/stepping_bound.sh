@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # tools/stepping_bound.py end to end: the fewest evaluations per particle the acoustic condition
-# allows, E0 = T / min(dt_max, Morris, lambda_c h / c_s), against the closed form on runs whose
-# c_s, h and lambda_c the test sets itself, the Morris cap on a synthetic folder, and refusals
-# that name the file. Each check prints what it expected.
+# allows, E0 = sum_k dt_k max(1 / cap, (c_s + vbar_k) / (lambda_c h)), against bounds that follow
+# from the runs' own step rules on runs whose c_s, h and lambda_c the test sets itself, closed
+# forms on synthetic folders (the Morris cap, the mean speeds), and refusals that name the file.
+# Each check prints what it expected.
 set -uo pipefail
 run=$1; src=$2
 tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
@@ -35,23 +36,36 @@ def expect(cond, what):
 h, c, lc = 4 * 0.01, 25.0, 0.8   # both scenes: r = 1 cm, h = 4 r (He et al.); c_s and lambda_c as set
 dt_c = lc * h / c                # 1.28 ms, below dt_max (5 ms); no viscosity term (nu = 0)
 
-# The tank at a constant 0.25 ms: 800 steps, every particle evaluated each step, so the ratio is
-# dt_c / 0.25 ms = 5.12 (to the float h and the 1 ps tick).
+# The tank at a constant 0.25 ms: 800 steps, every particle evaluated each step. At rest the
+# ratio would be dt_c / 0.25 ms = 5.12 (to the float h and the 1 ps tick); the tank settles from
+# its lattice, so each step's floor rises by 1 + vbar / c_s with vbar <= v_max, and the ratio lies
+# between 5.12 / (1 + max v_max / c_s) and 5.12, below it by the mean speed (nonzero: v_mean read).
 b = sb.bound(str(tmp / "tank"))
-print(f"tank: ratio {b['ratio']:.6f}, closed form {dt_c / 2.5e-4:.6f}")
+rows = list(csv.DictReader(open(tmp / "tank/stats.csv")))
+vmax = max(float(r["v_max"]) for r in rows)
+rest = dt_c / 2.5e-4
+print(f"tank: ratio {b['ratio']:.6f}, at rest {rest:.6f}, at least {rest / (1 + vmax / c):.6f}")
 expect(b["steps"] == 800, f"800 steps of 0.25 ms, got {b['steps']}")
-expect(abs(b["ratio"] - dt_c / 2.5e-4) < 1e-6 * dt_c / 2.5e-4, f"tank ratio {b['ratio']} = {dt_c / 2.5e-4}")
+expect(abs(b["bound_at_rest"] * rest - 800) < 1e-6 * 800, f"tank floor at rest {b['bound_at_rest']} = 800 / {rest}")
+expect(rest / (1 + vmax / c) * (1 - 1e-9) <= b["ratio"] < rest, f"tank ratio {b['ratio']} in [{rest / (1 + vmax / c)}, {rest})")
+expect(b["speed_share"] == 1.0, f"every step of a constant run has v_mean: {b['speed_share']}")
 
-# `global`: steps x dt_c / T. Step k is at most lambda_c h / (c_s + v_max,k) = dt_c / (1 + v_k / c_s)
-# (v_max of its stats.csv row, what it was sized from) and the last, clipped to the end, at most
-# dt_c, so the ratio is at least N / (sum_{k<N-1} 1 / (1 + v_k / c_s) + 1).
+# `global`: step k is at most lambda_c h / (c_s + v_max,k) (v_max of its stats.csv row, what it was
+# sized from) and the last, clipped to the end, at most that too; a step's floor is
+# dt_k (c_s + vbar_k) / (lambda_c h) <= (c_s + vbar_k) / (c_s + v_max,k) evaluations, so the ratio is
+# at least N / sum_k (c_s + vbar_k) / (c_s + v_max,k), at least 1 (vbar <= v_max), and below
+# the ratio at rest, N dt_c / T, by the mean speeds (> 0 in a dam break).
 b = sb.bound(str(tmp / "dam"))
 rows = list(csv.DictReader(open(tmp / "dam/stats.csv")))
 N, T = len(rows), sum(float(r["dt"]) for r in rows)
-lower = N / (sum(1 / (1 + float(r["v_max"]) / c) for r in rows[:-1]) + 1)
-print(f"dam break: ratio {b['ratio']:.6f} over {b['steps']} steps, T {T:.6f} s, at least {lower:.6f}")
-expect(abs(b["ratio"] - N * dt_c / T) < 1e-6 * b["ratio"], f"global ratio {b['ratio']} = {N * dt_c / T}")
-expect(b["ratio"] >= lower * (1 - 1e-6), f"global ratio {b['ratio']} at least {lower}")
+vbar = [float(r["v_mean"]) for r in rows]
+expect(all(0 <= vb <= float(r["v_max"]) * (1 + 1e-6) for vb, r in zip(vbar, rows)), "0 <= v_mean <= v_max on every row")
+lower = N / sum((c + vb) / (c + float(r["v_max"])) for vb, r in zip(vbar, rows))
+print(f"dam break: ratio {b['ratio']:.6f} over {b['steps']} steps, T {T:.6f} s, at least {lower:.6f}, "
+      f"at rest {N * dt_c / T:.6f}, mean speed {sum(vbar) / N:.4f} m/s")
+expect(lower * (1 - 1e-6) <= b["ratio"] < N * dt_c / T, f"global ratio {b['ratio']} in [{lower}, {N * dt_c / T})")
+expect(lower >= 1, f"the lower bound {lower} is at least 1")
+expect(abs(b["bound_at_rest"] - T / dt_c) < 1e-6 * b["bound_at_rest"], f"floor at rest {b['bound_at_rest']} = T / dt_c")
 expect(abs(b["evaluations_per_particle"] - b["steps"]) < 1e-6, "global evaluates every particle at every step")
 
 # A synthetic folder where Morris et al.'s viscous limit binds: h 0.04 m, nu 0.1 m^2/s gives
@@ -65,6 +79,19 @@ syn = tmp / "syn"; syn.mkdir()
 (syn / "stats.csv").write_text("step,dt,active_fraction,v_max,rolled_back\n0,0.001,1,0,0\n1,0.001,0.5,0,0\n")
 b = sb.bound(str(syn))
 expect(abs(b["dt_c"] - 5e-4) < 1e-12 and abs(b["ratio"] - 1.5 / 4) < 1e-12, f"Morris cap: {b}")
+# Mean speeds: h 0.04 m, c_s 20 m/s, lambda_c 1, no viscosity, dt_max 5 ms, so the bound is
+# 0.04 / (20 + vbar) s. Three 1 ms steps: every row at vbar 5 m/s (1 ms x 25 / 0.04 = 0.625
+# evaluations), every row at 60 m/s (2.0), half the rows at 60 m/s (not the whole fluid's mean:
+# counted at rest, 0.5): E0 = 3.125, made 2.5.
+spd = tmp / "spd"; spd.mkdir()
+(spd / "summary.json").write_text(json.dumps({
+    "method": "wcsph", "stepping": "binned", "kept_steps": 3,
+    "physics": {"support_radius": 0.04, "speed_of_sound": 20.0, "kinematic_viscosity": 0.0},
+    "stepping_params": {"acoustic": True, "lambda_c": 1.0, "dt_max": 0.005}}))
+(spd / "stats.csv").write_text("step,dt,active_fraction,v_max,v_mean\n0,0.001,1,9,5\n1,0.001,1,80,60\n2,0.001,0.5,80,60\n")
+b = sb.bound(str(spd))
+expect(abs(b["bound_evaluations_per_particle"] - 3.125) < 1e-12 and abs(b["ratio"] - 2.5 / 3.125) < 1e-12
+       and abs(b["bound_at_rest"] - 1.5) < 1e-12 and abs(b["speed_share"] - 2 / 3) < 1e-12, f"mean speeds: {b}")
 # The same folder claiming three kept steps (a stats.csv that starts at a checkpoint) is refused.
 part = tmp / "part"; shutil.copytree(syn, part)
 s = json.loads((part / "summary.json").read_text()); s["kept_steps"] = 3

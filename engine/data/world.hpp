@@ -109,6 +109,9 @@ private:
 struct StepStats {
     double rho_err_avg = 0, rho_err_max = 0;  ///< max(rho/rho0 - 1, 0), fluid average and max
     double v_max = 0, a_max = 0;
+    /// Mean |v_i| over the rows step_stats reduced (every row, or binned's active rows), m/s.
+    /// A diagnostic (stats.csv's v_mean): no system reads it, and checkpoints do not hold it.
+    double v_mean = 0;
     Index a_max_particle = 0;
 };
 

@@ -11,6 +11,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <limits>
 #include <iomanip>
 #include <sstream>
@@ -145,7 +146,7 @@ std::string Recorder::header(const Simulation& sim) const {
     std::ostringstream h;
     h << "step,t,dt,updated,neighbours_per_particle,rho_err_avg,rho_err_max,v_max,a_max,collisions,"
          "active,active_fraction,neighbour_searches,force_evaluations,boundary_contributions,"
-         "propagation_updates,iterations,boundary_active,rolled_back";
+         "propagation_updates,iterations,boundary_active,rolled_back,v_mean";
     for (const auto& name : extra_counters(sim.world())) h << ',' << name;
     h << ",wall_s";
     for (const auto& s : sim.graph().systems()) h << ",ms_" << s->name();
@@ -204,6 +205,13 @@ Recorder::Recorder(std::filesystem::path dir, const Simulation& sim, const nlohm
         throw InputError(csv.string() + ": holds " + std::to_string(have) + " bytes, expected at least the " +
                          std::to_string(bytes) + " written before the checkpoint (resume into another --out)");
     } else {
+        // Rows appended under another header would be misread by every tool (an older engine
+        // wrote the file, or another recipe with other systems).
+        std::string first;
+        std::getline(std::ifstream(csv), first);
+        if (first + '\n' != header(sim))
+            throw InputError(csv.string() + ": its columns differ from this run's (written by another engine version "
+                             "or recipe?); expected the header\n  " + header(sim) + "resume into another --out");
         m_stats_bytes = bytes;
         if (have > bytes) {
             // Rows written after the checkpoint will be written again: keep only the prefix.
@@ -328,7 +336,7 @@ void Recorder::after_step(const Simulation& sim) {
     for (const char* name : {"neighbour_searches", "force_evaluations", "boundary_contributions",
                              "propagation_updates", "iterations", "boundary_active"})
         row << ',' << c(name);
-    row << ',' << int(rec.rolled_back);
+    row << ',' << int(rec.rolled_back) << ',' << st.v_mean;
     for (const auto& name : extra_counters(w)) row << ',' << c(name);
     row << ',' << wall;
     const auto& g = sim.graph();

@@ -3,6 +3,8 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_reduce.h>
 
+#include <cmath>
+
 #include "engine/data/components.hpp"
 #include "engine/data/world.hpp"
 #include "engine/graph/context.hpp"
@@ -20,7 +22,7 @@ Access StepStatsSystem::access() const {
 
 namespace {
 struct Acc {
-    double err_sum = 0, err_max = 0, v2_max = 0, a2_max = 0;
+    double err_sum = 0, err_max = 0, v2_max = 0, a2_max = 0, v_sum = 0;
     Index a_arg = 0;
     std::uint64_t pairs = 0;
 };
@@ -49,7 +51,9 @@ void StepStatsSystem::run(Context& ctx) {
                 const double e = std::max(0.0, double(rho[i]) / rho0 - 1.0);
                 acc.err_sum += e;
                 acc.err_max = std::max(acc.err_max, e);
-                acc.v2_max = std::max(acc.v2_max, double(v[i].squaredNorm()));
+                const double v2 = v[i].squaredNorm();
+                acc.v2_max = std::max(acc.v2_max, v2);
+                acc.v_sum += std::sqrt(v2);
                 const double a2 = a[i].squaredNorm();
                 if (a2 > acc.a2_max || (a2 == acc.a2_max && Index(i) < acc.a_arg)) {
                     acc.a2_max = a2;
@@ -66,6 +70,7 @@ void StepStatsSystem::run(Context& ctx) {
             x.err_sum += y.err_sum;
             x.err_max = std::max(x.err_max, y.err_max);
             x.v2_max = std::max(x.v2_max, y.v2_max);
+            x.v_sum += y.v_sum;
             if (y.a2_max > x.a2_max) {
                 x.a2_max = y.a2_max;
                 x.a_arg = y.a_arg;
@@ -77,6 +82,7 @@ void StepStatsSystem::run(Context& ctx) {
     s.rho_err_avg = n ? r.err_sum / double(n) : 0.0;
     s.rho_err_max = r.err_max;
     s.v_max = std::sqrt(r.v2_max);
+    s.v_mean = n ? r.v_sum / double(n) : 0.0;
     s.a_max = std::sqrt(r.a2_max);
     s.a_max_particle = r.a_arg;
     ctx.write(counter::updated) = m_individual ? ctx.read(counter::active) : n;

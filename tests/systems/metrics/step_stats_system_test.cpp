@@ -51,7 +51,7 @@ struct Block {
 };
 
 struct Reference {
-    double err_avg = 0, err_max = 0, v_max = 0, a_max = 0, a_second = 0;
+    double err_avg = 0, err_max = 0, v_max = 0, v_mean = 0, a_max = 0, a_second = 0;
     Index a_arg = 0;
     std::uint64_t pairs = 0;
     std::size_t clamped = 0;  // particles with rho < rho0 (zero compression)
@@ -76,6 +76,7 @@ Reference brute_force(const World& w, const std::vector<std::uint8_t>* active = 
         r.err_avg += std::max(e, 0.0);
         r.err_max = std::max(r.err_max, e);
         r.v_max = std::max(r.v_max, v[i].cast<double>().norm());
+        r.v_mean += v[i].cast<double>().norm();
         const double an = a[i].cast<double>().norm();
         if (an > r.a_max) {
             r.a_second = r.a_max;
@@ -90,6 +91,7 @@ Reference brute_force(const World& w, const std::vector<std::uint8_t>* active = 
             if (j != i && (x[i] - x[j]).squaredNorm() < hr * hr) ++r.pairs;
     }
     r.err_avg /= double(counted);
+    r.v_mean /= double(counted);
     return r;
 }
 
@@ -108,9 +110,9 @@ std::vector<std::uint8_t> activate(World& w, Pick pick) {
 
 // Tolerances: rho_err is computed from the same float rho by the same double expression, so
 // max is exact and avg (a double sum of 1,600 terms of ~1e-2, in another order) agrees to
-// 1e-12 relative. v_max and a_max: the system squares the float vector in float (three
-// products and two sums, <= 3 ulp = 2e-7 relative on |v|^2, 1e-7 on |v|), the reference in
-// double: 1e-6 relative. Pair count and indices: exact.
+// 1e-12 relative. v_max, v_mean and a_max: the system squares the float vector in float (three
+// products and two sums, <= 3 ulp = 2e-7 relative on |v|^2, 1e-7 on |v|; v_mean sums those in
+// double), the reference in double: 1e-6 relative. Pair count and indices: exact.
 TEST(StepStats, GlobalMatchesBruteForce) {
     Block b(17);
     World& w = b.w;
@@ -130,6 +132,8 @@ TEST(StepStats, GlobalMatchesBruteForce) {
     EXPECT_NEAR(s.rho_err_avg, ref.err_avg, 1e-12 * ref.err_avg);
     EXPECT_DOUBLE_EQ(s.rho_err_max, ref.err_max);
     EXPECT_NEAR(s.v_max, ref.v_max, 1e-6 * ref.v_max);
+    EXPECT_NEAR(s.v_mean, ref.v_mean, 1e-6 * ref.v_mean);
+    ASSERT_LT(ref.v_mean, 0.9 * ref.v_max);  // the mean is not the largest speed under another name
     EXPECT_NEAR(s.a_max, ref.a_max, 1e-6 * ref.a_max);
     EXPECT_EQ(s.a_max_particle, ref.a_arg);
     EXPECT_EQ(w.counter_value("updated"), n);
@@ -203,6 +207,7 @@ TEST(StepStats, ActiveRowsMatchBruteForceAndTheWholeSetMatchesGlobal) {
     EXPECT_NEAR(w.stats.rho_err_avg, sub.err_avg, 1e-12 * sub.err_avg);
     EXPECT_DOUBLE_EQ(w.stats.rho_err_max, sub.err_max);
     EXPECT_NEAR(w.stats.v_max, sub.v_max, 1e-6 * sub.v_max);
+    EXPECT_NEAR(w.stats.v_mean, sub.v_mean, 1e-6 * sub.v_mean);
     EXPECT_NEAR(w.stats.a_max, sub.a_max, 1e-6 * sub.a_max);
     EXPECT_EQ(w.stats.a_max_particle, sub.a_arg);
 
@@ -219,6 +224,7 @@ TEST(StepStats, ActiveRowsMatchBruteForceAndTheWholeSetMatchesGlobal) {
     EXPECT_EQ(binned.rho_err_avg, w.stats.rho_err_avg);
     EXPECT_EQ(binned.rho_err_max, w.stats.rho_err_max);
     EXPECT_EQ(binned.v_max, w.stats.v_max);
+    EXPECT_EQ(binned.v_mean, w.stats.v_mean);
     EXPECT_EQ(binned.a_max, w.stats.a_max);
     EXPECT_EQ(binned.a_max_particle, w.stats.a_max_particle);
     EXPECT_EQ(binned_pairs, w.counter_value("neighbour_pairs"));
