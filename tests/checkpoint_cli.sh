@@ -108,6 +108,24 @@ check "its frames equal the uninterrupted run's" 'for f in "$tmp"/b/frames/*; do
 check "its stats.csv rows are the uninterrupted run's from the checkpoint on" \
   '[ "$(physics "$tmp/b/stats.csv" | tail -n +2)" = "$(physics "$tmp/a/stats.csv" | tail -n +$(( 10#${first//[^0-9]/} + 2 )))" ]'
 check "its probes/*.csv are the whole run's (the checkpoint carries the series)" 'same_probes "$tmp/a" "$tmp/b"'
+check "its frames.pvd lists exactly the frames it holds, and summary.json counts them" '"$py" - "$tmp/b" <<PY
+import json, pathlib, re, sys
+d = pathlib.Path(sys.argv[1])
+listed = re.findall(r"file=\"(frames/frame_\\d+\\.vtu)\"", (d / "frames.pvd").read_text())
+held = sorted("frames/" + f.name for f in (d / "frames").iterdir())
+print("  listed", listed, "held", held)
+sys.exit(0 if listed == held and len(held) > 0 and json.load(open(d / "summary.json"))["frames"] == len(held) else 1)
+PY'
+# Resuming from another working directory: the checkpoint names the run's folder and scene by
+# absolute paths, so the run continues in its own folder (not in a new one under the cwd).
+# A run started with relative paths (scene and --out), resumed from a sibling folder.
+mkdir -p "$tmp/elsewhere" && cp "$scene" "$tmp/rel.json"
+(cd "$tmp" && "$run" rel.json --end 0.02 --checkpoint-every 0.01 --no-frames --out rel -q); rc=$?
+cp "$tmp/rel/stats.csv" "$tmp/rel.stats.csv"
+ck_rel=$(ls "$tmp/rel/checkpoints" | head -1)
+(cd "$tmp/elsewhere" && "$run" --resume "../rel/checkpoints/$ck_rel" -q); rc2=$?
+check "resume from another working directory continues in the run's own folder (got $rc, $rc2)" \
+  '[ $rc -eq 0 ] && [ $rc2 -eq 0 ] && [ -z "$(ls -A "$tmp/elsewhere")" ] && cmp -s <(physics "$tmp/rel.stats.csv") <(physics "$tmp/rel/stats.csv")'
 
 # 4. Bad checkpoints.
 ck=$tmp/a/checkpoints/$first

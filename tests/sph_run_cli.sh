@@ -75,8 +75,17 @@ check "outputs written before the failure remain" '[ -f "$tmp/fall/stats.csv" ] 
 check "injected NaN exits 3 (got $rc)" '[ $rc -eq 3 ]'
 check "diagnosis names particle 5, step 3 and inject_nan" 'grep -q "particle 5 became non-finite at step 3 (t = .*): acceleration is NaN or infinite, first produced by system .inject_nan." "$tmp/err5"'
 check "frames written before the NaN remain complete" '[ -f "$tmp/nan/frames/frame_00000.vtu" ] && [ -z "$(find "$tmp/nan" -name "*.tmp*")" ]'
+check "summary.json is marked failed with the reason, the step and the run's threads" \
+  'python3 -c "import json, sys; j = json.load(open(\"$tmp/nan/summary.json\")); f = j[\"failed\"]; sys.exit(0 if \"particle 5 became non-finite\" in f[\"reason\"] and f[\"step\"] == 3 and j[\"threads\"] >= 1 and j[\"wall_time_s\"] > 0 else 1)"'
 "$run" "$src/scenes/dam_break.json" --inject-nan 3 --out "$tmp/nan2" 2>"$tmp/err6"; rc=$?
 check "malformed --inject-nan exits 2 (got $rc)" '[ $rc -eq 2 ] && grep -q "expected STEP:ID" "$tmp/err6" && [ ! -e "$tmp/nan2" ]'
+# A run into a folder that holds an earlier run's outputs, failing in its set-up (after the scene
+# loaded: here the --inject-nan argument, and an unwritable --graph path), leaves them as they were.
+ls -R "$tmp/nan" > "$tmp/nan.before"
+"$run" "$src/scenes/dam_break.json" --inject-nan 1:2:3 --out "$tmp/nan" 2>"$tmp/err7"; rc=$?
+"$run" "$src/scenes/dam_break.json" --graph /proc/none/g.dot --out "$tmp/nan" 2>"$tmp/err8"; rc8=$?
+check "set-up failures (exit $rc, $rc8) leave the earlier run's outputs" \
+  '[ $rc -eq 2 ] && [ $rc8 -eq 5 ] && cmp -s "$tmp/nan.before" <(ls -R "$tmp/nan") && grep -q "particle 5" "$tmp/nan/summary.json"'
 
 # 5. --help and --version.
 # (The output is captured first: `| grep -q` under pipefail fails when grep exits early and the

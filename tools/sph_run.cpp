@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -199,6 +200,7 @@ int main(int argc, char** argv) {
     std::unique_ptr<sph::Simulation> sim;
     std::unique_ptr<sph::Recorder> recorder;
     std::optional<std::chrono::steady_clock::time_point> run_started;  // for the summary of a salvaged run
+    int run_threads = threads;  // the run's thread count once known (summaries of failed runs)
     try {
         std::vector<std::pair<std::string, nlohmann::json>> overrides;
         for (const auto& s : sets) overrides.push_back(sph::parse_override(s));
@@ -275,8 +277,12 @@ int main(int argc, char** argv) {
         const std::string run_id =
             checkpoint ? checkpoint->meta.value("run_id", std::string()) : sph::new_run_id();
         folder = std::make_unique<sph::RunFolder>(out, run_id, scene.name, checkpoint.has_value(), force);
-        if (!folder->note().empty()) spdlog::info("{}", folder->note());
-        const int nthreads = threads > 0 ? threads : tbb::info::default_concurrency();
+        // oneTBB's arena runs at most the machine's concurrency, whatever the limit says.
+        const int cores = tbb::info::default_concurrency();
+        if (threads > cores)
+            spdlog::warn("--threads {}: this machine runs {} thread(s) at once; the run uses {}", threads, cores, cores);
+        const int nthreads = threads > 0 ? std::min(threads, cores) : cores;
+        run_threads = nthreads;
         tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(nthreads));
 
         const auto t_setup = std::chrono::steady_clock::now();
@@ -303,6 +309,10 @@ int main(int argc, char** argv) {
             sph::write_file_atomic(graph_file, sim->graph().dot());
             spdlog::info("system graph written to {}", graph_file);
         }
+        // Set-up succeeded: only now are an earlier run's outputs replaced (a run that fails
+        // before this point leaves them as they were).
+        folder->take();
+        if (!folder->note().empty()) spdlog::info("{}", folder->note());
         if (checkpoint) {
             try {
                 recorder = std::make_unique<sph::Recorder>(out, *sim, checkpoint->meta.at("recorder"));
@@ -321,10 +331,17 @@ int main(int argc, char** argv) {
         double next_checkpoint =
             checkpoint_every > 0 ? (std::floor(sim->time() / checkpoint_every + 1e-9) + 1) * checkpoint_every : 0.0;
         auto write_checkpoint = [&](const sph::Simulation& s) {
-            nlohmann::json meta = {{"scene_file", scene_file},
+            // Absolute paths: a resume from another working directory finds the run's folder and
+            // the files the scene names relative to itself (meshes).
+            std::error_code ec;
+            const auto absolute = [&](const std::filesystem::path& p) {
+                const auto a = std::filesystem::absolute(p, ec);
+                return (ec ? p : a).lexically_normal().string();
+            };
+            nlohmann::json meta = {{"scene_file", absolute(scene_file)},
                                    {"scene_text", scene_text},
                                    {"overrides", overrides_json},
-                                   {"out", out.string()},
+                                   {"out", absolute(out)},
                                    {"run_id", folder->run_id()},
                                    {"checkpoint_every", checkpoint_every},
                                    {"step", s.steps()},
@@ -415,7 +432,13 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "\nsph-run: simulation failed: %s\n", e.what());
         if (recorder && sim) {
             try {
-                recorder->finish(*sim, 0.0, threads);
+                const double wall = run_started ? std::chrono::duration<double>(std::chrono::steady_clock::now() -
+                                                                                *run_started).count()
+                                                : 0.0;
+                recorder->set_failed(e.what());
+                recorder->finish(*sim, wall, run_threads);
+                std::fprintf(stderr, "sph-run: stats.csv, probes and summary.json (marked \"failed\") cover the run "
+                                     "to its last good step\n");
             } catch (...) {
             }
         }
@@ -427,7 +450,7 @@ int main(int argc, char** argv) {
             const double wall = run_started ? std::chrono::duration<double>(std::chrono::steady_clock::now() -
                                                                             *run_started).count()
                                             : 0.0;
-            for (const auto& line : recorder->salvage(*sim, e.what(), wall, threads))
+            for (const auto& line : recorder->salvage(*sim, e.what(), wall, run_threads))
                 std::fprintf(stderr, "sph-run: saved before stopping: %s\n", line.c_str());
         }
         return 5;

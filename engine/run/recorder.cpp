@@ -169,6 +169,8 @@ Recorder::Recorder(std::filesystem::path dir, const Simulation& sim, const nlohm
     std::filesystem::create_directories(m_dir);
     reserve_space();
     m_frame = st.at("frame").get<std::size_t>();
+    m_start_steps = sim.steps();
+    m_first_frame = st.value("first_frame", std::size_t(0));  // absent before 2026-12-06: 0
     m_boundary_written = std::filesystem::exists(m_dir / "boundary" / "walls.vtu") ||
                          std::filesystem::exists(m_dir / "boundary" / "walls.ply") ||
                          std::filesystem::exists(m_dir / "boundary" / "walls.bgeo");
@@ -200,7 +202,10 @@ Recorder::Recorder(std::filesystem::path dir, const Simulation& sim, const nlohm
     std::error_code ec;
     const auto have = std::filesystem::file_size(csv, ec);
     if (ec) {
-        m_pending = header(sim);  // a new directory: stats.csv starts at the checkpoint's step
+        // A new directory: stats.csv starts at the checkpoint's step, and so do the frames (the
+        // collections list only those this folder holds).
+        m_pending = header(sim);
+        m_first_frame = m_frame;
     } else if (have < bytes) {
         throw InputError(csv.string() + ": holds " + std::to_string(have) + " bytes, expected at least the " +
                          std::to_string(bytes) + " written before the checkpoint (resume into another --out)");
@@ -226,6 +231,7 @@ Recorder::Recorder(std::filesystem::path dir, const Simulation& sim, const nlohm
 nlohmann::json Recorder::state() {
     flush_stats();
     return {{"frame", m_frame},
+            {"first_frame", m_first_frame},
             {"frame_times", m_frame_times},
             {"next_frame_time", m_next_frame_time},
             {"collisions", m_collisions},
@@ -293,7 +299,7 @@ void Recorder::write_collection(const World& w) const {
         x << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
              "  <Collection>\n"
           << std::setprecision(17);
-        for (std::size_t k = 0; k < m_frame_times.size(); ++k) {
+        for (std::size_t k = m_first_frame; k < m_frame_times.size(); ++k) {
             char name[48];
             std::snprintf(name, sizeof name, "%s_%05zu.vtu", stem, k);  // relative to the run folder
             x << "    <DataSet timestep=\"" << m_frame_times[k] << "\" group=\"\" part=\"0\" file=\"" << name
@@ -407,7 +413,9 @@ nlohmann::json Recorder::finish(const Simulation& sim, double wall_seconds, int 
     j["threads"] = threads;
     // The instruction set of the pair loops: the dispatched target, or "scalar" (simulation.simd).
     j["simd"] = w.physics.simd ? simd_target() : std::string("scalar");
-    const double fps = wall_seconds > 0 ? double(w.fluid.size()) * double(sim.steps()) / wall_seconds : 0.0;
+    // Over the steps this process took (wall_seconds is its own; a resumed run took fewer).
+    const double fps =
+        wall_seconds > 0 ? double(w.fluid.size()) * double(sim.steps() - m_start_steps) / wall_seconds : 0.0;
     j["fluid_particle_steps_per_s"] = fps;
     j["avg_dt_s"] = sim.steps() ? sim.time() / double(sim.steps()) : 0.0;
     j["min_dt_s"] = m_dt_min;
@@ -459,7 +467,7 @@ nlohmann::json Recorder::finish(const Simulation& sim, double wall_seconds, int 
         j["standing_wave"] = {{"amplitude", wave->amplitude}, {"mode", wave->mode}, {"at", wave->at},
                               {"period_theory_s", th.period}, {"decay_theory_per_s", th.decay}};
     }
-    j["frames"] = m_frame;
+    j["frames"] = m_frame - m_first_frame;  // in this folder (a resume into a new one starts later)
     if (m_surface_frames > 0) {
         // The surface's cost per frame, also in steps of this run (an average step's time in
         // the systems).
@@ -490,6 +498,7 @@ nlohmann::json Recorder::finish(const Simulation& sim, double wall_seconds, int 
     j["systems_total_s"] = total;
     j["spatial_sort_s"] = m_sort_seconds;  // outside the systems: the re-sorts of the particle columns
     if (!m_interrupted.empty()) j["interrupted"] = {{"by", m_interrupted}, {"t", sim.time()}, {"step", sim.steps()}};
+    if (!m_failed.empty()) j["failed"] = {{"reason", m_failed}, {"t", sim.time()}, {"step", sim.steps()}};
     if (!m_output_failed.empty())
         j["output_failed"] = {{"reason", m_output_failed}, {"t", sim.time()}, {"step", sim.steps()}};
     write_file_atomic(m_dir / "summary.json", j.dump(2) + "\n");

@@ -50,12 +50,16 @@ public:
     nlohmann::json finish(const Simulation& sim, double wall_seconds, int threads);
 
     const std::filesystem::path& dir() const { return m_dir; }
-    std::size_t frames_written() const { return m_frame; }
+    /// Frames in this run's folder (a run resumed into a new folder holds those from the
+    /// checkpoint on).
+    std::size_t frames_written() const { return m_frame - m_first_frame; }
     /// @brief Commits stats.csv, then returns everything needed to continue the outputs
     /// exactly (frame counter, next frame time, summary accumulators, committed CSV bytes).
     nlohmann::json state();
     /// @brief Marks the run as stopped before its end (summary.json "interrupted": the signal).
     void set_interrupted(std::string reason) { m_interrupted = std::move(reason); }
+    /// @brief Marks the run as failed (summary.json "failed": the simulation's error).
+    void set_failed(std::string reason) { m_failed = std::move(reason); }
     /// @brief Commits the pending stats.csv rows.
     void flush_stats();
     /// @brief After an output failed (OutputError: disk full, ...): frees the reserve, appends
@@ -70,6 +74,7 @@ private:
     bool front_due(const World& w) const;
     bool frame_due(const World& w) const;
     std::string m_interrupted;  ///< why the run stopped early ("" when it reached its end)
+    std::string m_failed;  ///< set_failed's reason ("" for a run that did not fail)
     std::string m_output_failed;  ///< the output error salvage() was called for
     void reserve_space();
     void release_reserve();
@@ -86,7 +91,9 @@ private:
     ProbeSet m_probes;  ///< the scene's probes, written to probes/<name>.csv with stats.csv
     std::string m_pending;           ///< rows not yet committed to stats.csv
     std::uint64_t m_stats_bytes = 0;  ///< bytes of stats.csv committed so far
-    std::size_t m_frame = 0;
+    std::size_t m_frame = 0;        ///< the next frame's index (frames since the run began)
+    std::size_t m_first_frame = 0;  ///< the first frame this folder holds
+    std::int64_t m_start_steps = 0;  ///< steps taken before this process (a resumed run's checkpoint)
     std::vector<double> m_frame_times;  ///< simulated time of each frame written
     bool m_boundary_written = false;    ///< frames/boundary.* (the static boundary) exists
     std::uint64_t m_collisions = 0;

@@ -125,7 +125,7 @@ RunFolder::RunFolder(fs::path dir, std::string run_id, std::string scene, bool r
                     throw InputError(m_dir.string() + ": holds outputs (" + outputs +
                                      ") that no sph-run run claims (no run.json); pass --force to replace them or "
                                      "choose another --out");
-                remove_outputs(m_dir, false);
+                m_replace = Replace::All;
                 m_note = "replaced the outputs (" + outputs + ") of " +
                          (marker.is_null() ? std::string("an unmarked run") : describe(marker)) + " in " + m_dir.string();
             }
@@ -134,24 +134,32 @@ RunFolder::RunFolder(fs::path dir, std::string run_id, std::string scene, bool r
                 throw InputError(m_dir.string() + ": holds the outputs of " + describe(marker) +
                                  ", the checkpoint belongs to run " + m_run_id +
                                  "; resume into the run's own folder or an empty --out, or pass --force to replace them");
-            remove_outputs(m_dir, true);  // the checkpoint being resumed may live in checkpoints/
+            m_replace = Replace::AllButCheckpoints;  // the checkpoint being resumed may live in checkpoints/
             m_note = "replaced the outputs of " + describe(marker) + " in " + m_dir.string();
         }
-        nlohmann::json mark = {{"run_id", m_run_id},
-                               {"scene", scene},
-                               {"pid", ::getpid()},
-                               {"started_unix_s", std::chrono::duration_cast<std::chrono::seconds>(
-                                                      std::chrono::system_clock::now().time_since_epoch())
-                                                      .count()},
-                               {"resumed", resume},
-                               {"sph_version", SPH_VERSION}};
-        write_file_atomic(m_dir / kMarker, mark.dump(2) + "\n");
+        m_marker = {{"run_id", m_run_id},
+                    {"scene", scene},
+                    {"pid", ::getpid()},
+                    {"resumed", resume},
+                    {"sph_version", SPH_VERSION}};
+        // A folder this run created holds no earlier outputs: marked now, so that a second run
+        // started during the set-up sees whose it is.
+        if (m_created) take();
     } catch (...) {
         ::close(m_lock_fd);
         m_lock_fd = -1;
         if (m_created) fs::remove_all(m_created_root, ec);
         throw;
     }
+}
+
+void RunFolder::take() {
+    if (m_taken) return;
+    if (m_replace != Replace::None) remove_outputs(m_dir, m_replace == Replace::AllButCheckpoints);
+    m_marker["started_unix_s"] =
+        std::chrono::duration_cast<std::chrono::seconds>(std::chrono::system_clock::now().time_since_epoch()).count();
+    write_file_atomic(m_dir / kMarker, m_marker.dump(2) + "\n");
+    m_taken = true;
 }
 
 RunFolder::~RunFolder() {

@@ -6,12 +6,15 @@
 ///   - a marker, <dir>/run.json (run id, scene, pid, start time), naming the run whose outputs
 ///     the folder holds.
 /// A fresh run into a folder that holds the outputs of an earlier marked run removes them
-/// first (stats.csv, summary.json, frames/, boundary/, the .pvd files, probes/, checkpoints/);
-/// outputs without a marker
+/// (stats.csv, summary.json, frames/, boundary/, the .pvd files, probes/, checkpoints/) when it
+/// takes the folder, after its set-up succeeded (take()): a run whose set-up fails leaves the
+/// earlier outputs as they were. Outputs without a marker
 /// (another program's, or an older sph-run's) are replaced only with `force`. A resumed run
 /// must find its own run's marker (or none).
 #include <filesystem>
 #include <string>
+
+#include <nlohmann/json.hpp>
 
 namespace sph {
 
@@ -28,20 +31,26 @@ public:
     RunFolder(const RunFolder&) = delete;
     RunFolder& operator=(const RunFolder&) = delete;
 
+    /// @brief Set-up succeeded and the run is about to write: removes the earlier run's outputs
+    /// the constructor found (see note()) and writes the marker. Throws OutputError when an
+    /// output cannot be removed or the marker written. Called once; later calls do nothing.
+    void take();
     /// @brief The run has begun writing: the folder is kept whatever happens next. Until
     /// then a folder this object created is removed again when it is destroyed (a run whose
     /// set-up failed leaves nothing behind).
     void keep() { m_keep = true; }
     const std::filesystem::path& dir() const { return m_dir; }
     const std::string& run_id() const { return m_run_id; }
-    /// @brief What the constructor did with earlier outputs, for the log ("" when nothing).
+    /// @brief What take() does (did) with earlier outputs, for the log ("" when nothing).
     const std::string& note() const { return m_note; }
 
 private:
     std::filesystem::path m_dir, m_created_root;
     std::string m_run_id, m_note;
     int m_lock_fd = -1;
-    bool m_created = false, m_keep = false;
+    bool m_created = false, m_keep = false, m_taken = false;
+    enum class Replace { None, All, AllButCheckpoints } m_replace = Replace::None;
+    nlohmann::json m_marker;  ///< written by take()
 };
 
 /// @brief A new run identity: 16 hexadecimal digits from the system's random source.
