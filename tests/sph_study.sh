@@ -95,3 +95,15 @@ assert 0 < float(row["wave decay / theory"]) < 10, row
 assert "wave period s (err %)" in (d / "study.md").read_text()
 print("sph-study standing wave: ok")
 PY
+
+# A probe whose experiment file is missing stops the study before any run (exit 2, naming the
+# scene, the probe and the file), not with a traceback after every configuration has run.
+/usr/bin/python3 -c "
+import json, sys
+s = json.load(open('scenes/martin_moyce.json'))
+s['probes'][0]['experiment']['file'] = 'no_such_experiment.csv'
+json.dump(s, open(sys.argv[1], 'w'))" "$out/bad_exp.json"
+rc=0; "$tools/sph-study" "$out/bad_exp.json" --no-default-modes --config global --end 0.002 --out "$out/x" > "$out/xlog" 2>&1 || rc=$?
+grep -q "bad_exp.json: probe 'front': experiment file .*no_such_experiment.csv: No such file or directory" "$out/xlog" \
+    && [ "$rc" -eq 2 ] && [ ! -e "$out/x/reference" ] || { echo "missing experiment file: exit $rc"; cat "$out/xlog"; exit 1; }
+echo "sph-study missing experiment file: ok"

@@ -441,6 +441,18 @@ def main():
         fail(f"{args.sph_run}: not found (build first: cmake --build build)")
 
     study = Study(args)
+    # The experiments' files are read before any run, so that a missing or unreadable one stops
+    # the study at once instead of after every configuration has run.
+    for probe in study.probes:
+        if "experiment" not in probe:
+            continue
+        where = study.scene.resolve().parent / probe["experiment"]["file"]
+        try:
+            data = read_csv(where)
+            if len(data) < 2 or len(next(iter(data.values()))) == 0:
+                raise ValueError("expected a header and at least one row of two or more columns")
+        except (OSError, ValueError) as e:
+            fail(f"{study.scene}: probe '{probe.get('name')}': experiment file {where}: {getattr(e, 'strerror', None) or e}")
     started = datetime.datetime.now()
     configs, results, ref_dir = study.run()
     ref = primary_series(ref_dir, study.probes)
