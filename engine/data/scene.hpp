@@ -385,6 +385,10 @@ std::string read_scene_file(const std::filesystem::path& file);
 Scene parse_scene(const std::string& text, const std::string& file,
                   const std::vector<std::pair<std::string, nlohmann::json>>& overrides = {});
 
+/// @brief The domain of a scene that declares none: the bounding box of its boundaries (swept by
+/// their motion to the end time), fluid blocks and emitters, grown by the support radius h (m).
+Aabb default_domain(const Scene& scene, double h);
+
 /// @brief Parses a command-line `--set path=value`: path in dotted form
 /// (`simulation.stepping.lambda_v`), value as JSON (a bare word is taken as a string).
 std::pair<std::string, nlohmann::json> parse_override(const std::string& assignment);

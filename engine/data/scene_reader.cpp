@@ -643,14 +643,17 @@ class Reader {
         if (const json* v = n.find("wall_pressure")) p.wall_pressure = pick_enum(n.at(*v, "wall_pressure"), k_wall_pressures);
     }
 
-    Aabb read_box(const Node& n) const {
+    /// @param span_xz only x and z must have max > min (a heightfield's span: its y is ignored).
+    Aabb read_box(const Node& n, bool span_xz = false) const {
         Aabb box;
         box.min = required_vec3(n, "min", "metres");
         box.max = required_vec3(n, "max", "metres");
-        if (!(box.min.array() < box.max.array()).all()) {
+        const bool ok = span_xz ? box.min.x() < box.max.x() && box.min.z() < box.max.z()
+                                : (box.min.array() < box.max.array()).all();
+        if (!ok) {
             const std::string max_path = child(n.path, "max");
             fail_at(max_path, dump_at(max_path),
-                    "a point above min " + fmt_vec(box.min) + " on every axis (metres)",
+                    "a point above min " + fmt_vec(box.min) + (span_xz ? " in x and z (metres; y is ignored)" : " on every axis (metres)"),
                     {max_path, child(n.path, "min")});
         }
         return box;
@@ -698,7 +701,7 @@ class Reader {
             b.box = Aabb{b.center.cwiseMin(top) - ext, b.center.cwiseMax(top) + ext};
         } else if (b.shape == BoundaryShape::Heightfield) {
             check_keys(n, k_heightfield_boundary_keys, context);
-            const Aabb span = read_box(n);
+            const Aabb span = read_box(n, true);
             const char* what = "an array of at least 2 rows (along z), each an array of the same number (>= 2) of "
                                "heights (metres, along x)";
             const json* hv = n.find("heights");
@@ -922,6 +925,28 @@ class Reader {
             const Vec3d d0 = declared.motion ? displacement(*declared.motion, 0.0) : Vec3d::Zero();
             at_start.push_back(declared.motion ? translated(declared, d0) : declared);
             shifted.push_back(d0 != Vec3d::Zero());
+        }
+        // A pressure probe outside the domain reads nothing (0 at every sample).
+        const Aabb domain = s.domain ? *s.domain : default_domain(s, s.fluid.support * spacing);
+        for (std::size_t k = 0; k < s.probes.size(); ++k) {
+            if (s.probes[k].type != ProbeType::Pressure || domain.contains(s.probes[k].point)) continue;
+            const std::string ppath = child(child("/probes", k), "point");
+            const auto vec = [&](const Vec3d& v) { return s.domain ? fmt_vec(v) : fmt_vec_computed(v); };
+            const std::string expected = "a point inside the domain (min " + vec(domain.min) + ", max " +
+                                         vec(domain.max) + (s.domain ? ")" : ": the boundaries and fluid grown by h)");
+            if (s.domain) fail_at(ppath, dump_at(ppath), expected, {ppath, "/domain"});
+            fail_at(ppath, dump_at(ppath), expected, {ppath});
+        }
+        // A container reaching beyond the domain lets the fluid leave the domain (and stop the
+        // run) before it meets the container's walls.
+        for (std::size_t j = 0; s.domain && j < at_start.size(); ++j) {
+            const BoundaryDesc& b = at_start[j];
+            if (b.shape != BoundaryShape::Container || inside(b.box, *s.domain)) continue;
+            const std::string bpath = child("/boundaries", j);
+            fail_at(bpath, dump_at(bpath),
+                    "a container inside the domain (min " + fmt_vec(s.domain->min) + ", max " + fmt_vec(s.domain->max) +
+                        "): fluid would leave the domain before it meets the container's walls",
+                    {bpath, "/domain"});
         }
         for (std::size_t i = 0; i < s.fluid_blocks.size(); ++i) {
             const Aabb& box = s.fluid_blocks[i].box;

@@ -26,6 +26,8 @@ Real lattice_mass(const CubicSpline& kernel, Real spacing, Real rest_density) {
     return Real(rest_density / sum);
 }
 
+}  // namespace
+
 Aabb default_domain(const Scene& scene, double h) {
     Aabb box{Vec3d::Constant(std::numeric_limits<double>::max()), Vec3d::Constant(std::numeric_limits<double>::lowest())};
     auto grow = [&](const Vec3d& p) {
@@ -57,6 +59,8 @@ Aabb default_domain(const Scene& scene, double h) {
     box.max += Vec3d::Constant(h);
     return box;
 }
+
+namespace {
 
 /// The fluid lattice of every block, in double precision (written to the store once c_s is known).
 struct FluidSample {
