@@ -22,6 +22,15 @@ Real boundary_volume_gamma(const CubicSpline& kernel, Real spacing) {
     return Real(double(spacing) * spacing * spacing * sum);
 }
 
+std::vector<std::uint32_t> boundary_objects(std::size_t n, const std::vector<MovingBody>& bodies) {
+    std::vector<std::uint32_t> group;
+    if (bodies.empty()) return group;
+    group.assign(n, 0);
+    for (std::size_t k = 0; k < bodies.size(); ++k)
+        for (std::size_t i = bodies[k].begin; i < bodies[k].end; ++i) group[i] = std::uint32_t(k + 1);
+    return group;
+}
+
 Access BoundaryVolumeSystem::access() const {
     return Access()
         .read(boundary(comp::position), res::boundary_grid, res::moving_bodies)
@@ -43,15 +52,8 @@ void BoundaryVolumeSystem::run(Context& ctx) {
     // over every boundary particle, recomputed per step) would let a body passing a wall shrink
     // both its own and the wall's psi_b = rho0 V_b and so weaken both walls exactly where the
     // fluid between them is squeezed. Static scenes have one group (every particle), unchanged.
-    std::vector<std::uint32_t> group;
-    const std::vector<MovingBody>& bodies = ctx.read(res::moving_bodies);
+    const std::vector<std::uint32_t> group = boundary_objects(x.size(), ctx.read(res::moving_bodies));
     const UniformGrid& grid = ctx.read(res::boundary_grid);
-    if (!bodies.empty()) {
-        group.assign(x.size(), 0);
-        for (std::size_t k = 0; k < bodies.size(); ++k)
-            for (std::size_t i = bodies[k].begin; i < bodies[k].end; ++i)
-                group[i] = std::uint32_t(k + 1);
-    }
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 1024), [&](const auto& r) {
         for (std::size_t b = r.begin(); b < r.end(); ++b) {
             Real sum = 0;

@@ -12,13 +12,23 @@
 ///
 /// Moving bodies: the sum runs over the particle's own rigid object (static boundaries, or
 /// one moving body), so a body's volumes are constant under its translation and computed once.
+#include <cstdint>
+#include <vector>
+
 #include "engine/core/kernel.hpp"
+#include "engine/data/world.hpp"
 #include "engine/graph/system.hpp"
 
 namespace sph {
 
 /// @brief gamma = s^3 sum_{i,j} W(s sqrt(i^2 + j^2)) over a plane square lattice.
 Real boundary_volume_gamma(const CubicSpline& kernel, Real spacing);
+
+/// @brief The rigid object of each of n boundary rows: 0 for the static boundaries, k + 1 for
+/// the rows of bodies[k]; empty when nothing moves (every row one object). Sums over a
+/// particle's own object (eq. 4 here, Ihmsen et al. 2010's boundary part of rho_b in
+/// BoundaryMassSystem) are then invariant under the bodies' rigid motion.
+std::vector<std::uint32_t> boundary_objects(std::size_t n, const std::vector<MovingBody>& bodies);
 
 class BoundaryVolumeSystem final : public System {
 public:

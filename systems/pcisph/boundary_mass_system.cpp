@@ -1,5 +1,8 @@
 // Ihmsen et al. 2010 sec. 3.2, eq. 13: m_b = rho0 V_b (Akinci et al. 2012 eq. 4 volume) and the
-// constant boundary part of a boundary particle's density, sum_b' m_b' W_bb'.
+// boundary part of a boundary particle's density, sum_b' m_b' W_bb', over the particle's own
+// rigid object (the static boundaries, or one moving body; boundary_objects), as the volumes
+// are: constant under the bodies' rigid motion, so computed once. (Over every boundary particle
+// it would be the value at t = 0, kept as a body moves away from or towards a wall.)
 #include "systems/pcisph/boundary_mass_system.hpp"
 
 #include <tbb/blocked_range.h>
@@ -8,6 +11,7 @@
 #include "engine/data/components.hpp"
 #include "engine/data/world.hpp"
 #include "engine/graph/context.hpp"
+#include "systems/boundary/boundary_volume_system.hpp"
 #include "systems/pcisph/pcisph_components.hpp"
 #include "systems/pcisph/pcisph_kernels.hpp"
 #include "systems/pcisph/pcisph_state.hpp"
@@ -16,7 +20,7 @@ namespace sph {
 
 Access BoundaryMassSystem::access() const {
     return Access()
-        .read(boundary(comp::position), boundary(comp::volume), res::boundary_grid)
+        .read(boundary(comp::position), boundary(comp::volume), res::boundary_grid, res::moving_bodies)
         .write(boundary(comp::mass), boundary(comp::self_density));
 }
 
@@ -35,10 +39,12 @@ void BoundaryMassSystem::run(Context& ctx) {
     const CubicSpline& kernel = ctx.kernel();
     const Real h2 = kernel.support() * kernel.support();
     const UniformGrid& grid = ctx.read(res::boundary_grid);
+    const std::vector<std::uint32_t> group = boundary_objects(x.size(), ctx.read(res::moving_bodies));
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 1024), [&](const auto& r) {
         for (std::size_t b = r.begin(); b < r.end(); ++b) {
             Real sum = 0;
             grid.for_each_candidate(x[b], x, [&](Index k, const Vec3& xk) {
+                if (!group.empty() && group[k] != group[b]) return;
                 const Real d2 = (x[b] - xk).squaredNorm();
                 if (d2 < h2) sum += m[k] * kernel.w(std::sqrt(d2));
             });

@@ -12,8 +12,8 @@ inline constexpr Component<Vec3> pressure_acceleration{"pressure_acceleration"};
 inline constexpr Component<Real> pressure_term{"pressure_term"};
 /// Viscosity and surface tension per unit mass (only when the scene asks for them).
 inline constexpr Component<Vec3> nonpressure_acceleration{"nonpressure_acceleration"};
-/// Boundary: m_b = rho0 V_b (eq. 13 with Akinci's volume) and the constant boundary part of
-/// its own density, sum_b' m_b' W_bb'.
+/// Boundary: m_b = rho0 V_b (eq. 13 with Akinci's volume) and the boundary part of its own
+/// density, sum_b' m_b' W_bb' over its own rigid object (constant: BoundaryMassSystem).
 inline constexpr Component<Real> mass{"mass"};
 inline constexpr Component<Real> self_density{"self_density"};
 

@@ -23,7 +23,6 @@ namespace sph {
 
 Access PcisphStepSizeSystem::access() const {
     return Access()
-        .read(res::pcisph_controller)
         .write(res::dt, res::pcisph_delta)
         .read_if(m_adaptive, fluid(comp::velocity))
         .write_if(m_adaptive, res::pcisph_controller, res::rollback);

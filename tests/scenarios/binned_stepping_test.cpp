@@ -494,6 +494,9 @@ TEST(BinnedStepping, KeptGridWithAMovingBodyEqualsAGridBuiltEveryStep) {
     }
     expect_same_columns(*a, *b);
     std::printf("moving body: grid kept on %d of %d steps\n", kept, k);
+    // Otherwise both runs build the grid every step and the comparison says nothing: kept on 332
+    // of 1,169 steps (28 %) measured 2026-12-06; a tenth leaves room for the sanitizers' shorter run.
+    EXPECT_GE(10 * kept, k);
 }
 
 // The active set with a moving body (binned_select: every row is scanned while a scene has
