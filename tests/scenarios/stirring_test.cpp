@@ -112,8 +112,10 @@ Result run(SteppingMode mode) {
 // disturbance also spreads sideways and flows round and under the body, and the rear wave
 // reflects off the near wall, so 2 rho A_f U c t is more than the fluid can hold; a body that
 // pushed twice as hard as it should (e.g. its velocity counted twice) would exceed it.
-// Individual vs global: the same flow evaluated on different (individual) steps; we allow
-// 15 % on the momentum (the tolerance of the slab-splash test, for a chaotic free surface).
+// Individual vs global: the same flow evaluated on different (individual) steps. Measured: 0.5 %
+// apart on the momentum (0.2981 against 0.2966 kg m/s, 2026-12-06) and 4 % on an earlier engine
+// (docs/results/he_table1.md); 5 % allowed. Individual evaluated 66.8 % of the particles per
+// step on average: below 80 % asserted (it really skipped work).
 TEST(Stirring, PushedBoxMovesFluidWithoutPenetration) {
     const Result g = run(SteppingMode::Global), in = run(SteppingMode::Individual);
     const double submerged = (k_box.max.x() - k_box.min.x()) * (k_depth - k_box.min.y()) * (k_box.max.z() - k_box.min.z());
@@ -132,8 +134,8 @@ TEST(Stirring, PushedBoxMovesFluidWithoutPenetration) {
         EXPECT_GT(r.momentum, floor);
         EXPECT_LT(r.momentum, ceiling);
     }
-    EXPECT_NEAR(in.momentum, g.momentum, 0.15 * g.momentum);
-    EXPECT_LT(in.active, 1.0);  // individual stepping really skipped work
+    EXPECT_NEAR(in.momentum, g.momentum, 0.05 * g.momentum);
+    EXPECT_LT(in.active, 0.8);
 }
 
 // scenes/stirring_pool.json (He et al. Fig. 3): about 50k fluid particles at scale 1 and the

@@ -1,20 +1,22 @@
 // Mode agreement on scenes/dam_break.json (its probes `front` and `fluid`): every adaptive
-// stepping mode the loader knows (global, individual today; a mode added later joins with no
-// new code) must reproduce the front and kinetic-energy curves of a fine constant-step
+// stepping mode the loader knows (global, individual, binned today; a mode added later joins
+// with no new code) must reproduce the front and kinetic-energy curves of a fine constant-step
 // reference over the collapse and the run along the floor (0 <= t <= 0.5 s; the front reaches
 // the far wall at about 0.45 s). The reference steps at half the smallest step `global` took.
 //
 // Tolerances, and why:
-//  * front: RMS deviation <= one particle spacing (0.02 m). The front probe is the position
-//    of a particle (the farthest with >= 4 neighbours): it cannot resolve less than the
-//    particle scale, and a mode whose fluid lags or leads by a spacing is visibly different.
-//    The front travels 1.2 m in this window, 60 spacings.
-//  * kinetic energy: RMS deviation <= 3 % of the reference's peak kinetic energy. The step
+//  * front: RMS deviation <= half a particle spacing (0.01 m). The front probe is the position
+//    of a particle (the farthest with >= 4 neighbours): it cannot resolve much less than the
+//    particle scale. The front travels 1.2 m in this window, 60 spacings. Measured 2026-12-06:
+//    global 0.20, individual 0.21, binned 0.17 spacings (2026-11-23: 0.15 and 0.22); half a
+//    spacing is 2.4x the largest.
+//  * kinetic energy: RMS deviation <= 0.6 % of the reference's peak kinetic energy. The step
 //    size changes the energy the artificial viscosity and the symplectic Euler scheme
 //    dissipate (both O(dt)); the modes take steps 1.3-3 times the reference's (global 0.4 ms
-//    on average against 0.19 ms). Measured 2026-11-23: global 0.09 %, individual 1.2 %, front
-//    0.15 and 0.22 spacings; 3 % leaves a margin over individual's 1.2 % while a mode that
-//    loses or gains energy visibly (a step too large for the impact) fails.
+//    on average against 0.19 ms). Measured 2026-12-06: global 0.15 %, individual 0.19 %
+//    (`deadline` activation; He's `paper` rule measured 1.2 % on 2026-11-23 and is not run
+//    here), binned 0.12 %; 0.6 % is 3x the largest, while a mode that loses or gains energy
+//    visibly (a step too large for the impact) fails.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -99,7 +101,7 @@ TEST(ModeAgreement, DamBreakFrontAndEnergyMatchAFineConstantReference) {
                     "deviation %.3f J (%.2f %% of peak)\n",
                     m.c_str(), static_cast<long long>(r.steps), dev_front, dev_front / spacing, dev_ke,
                     100 * dev_ke / ke_peak);
-        EXPECT_LE(dev_front, spacing) << m;
-        EXPECT_LE(dev_ke, 0.03 * ke_peak) << m;
+        EXPECT_LE(dev_front, 0.5 * spacing) << m;
+        EXPECT_LE(dev_ke, 0.006 * ke_peak) << m;
     }
 }
