@@ -190,6 +190,10 @@ double artificial_viscosity(const Scene& scene) {
     return density_form(scene) == DensityForm::Continuity ? 0.01 : 0.1;
 }
 
+double boundary_artificial_viscosity(const Scene& scene) {
+    return scene.fluid.boundary_viscosity.value_or(artificial_viscosity(scene));
+}
+
 double kinematic_viscosity(const Scene& scene) {
     if (scene.fluid.kinematic_viscosity) return *scene.fluid.kinematic_viscosity;
     return scene.simulation.method == Method::Wcsph ? 1e-6 : 0.0;

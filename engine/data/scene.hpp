@@ -338,6 +338,10 @@ DensityForm density_form(const Scene& scene);
 /// more, docs/results/validation.md) and 0.1 otherwise (He et al.'s scenes).
 double artificial_viscosity(const Scene& scene);
 
+/// @brief The Monaghan alpha against boundary particles: fluid.boundary_viscosity, or unset the
+/// fluid's (artificial_viscosity). 0: free-slip walls. Every method applies it at the walls.
+double boundary_artificial_viscosity(const Scene& scene);
+
 /// @brief The laminar kinematic viscosity a scene runs with: fluid.kinematic_viscosity, or unset
 /// water's 1e-6 m^2/s for WCSPH and 0 for PCISPH and DFSPH (which have no laminar term).
 double kinematic_viscosity(const Scene& scene);

@@ -78,7 +78,7 @@ void derive_constants(World& w, const Scene& scene) {
     ph.h = Real(scene.fluid.support * 2 * r);  // 4 r by default (He et al.)
     ph.rest_density = Real(scene.fluid.rest_density);
     ph.viscosity = Real(artificial_viscosity(scene));
-    ph.boundary_viscosity = Real(scene.fluid.boundary_viscosity.value_or(artificial_viscosity(scene)));
+    ph.boundary_viscosity = Real(boundary_artificial_viscosity(scene));
     ph.gravity = scene.simulation.gravity.cast<Real>();
     ph.continuity = density_form(scene) == DensityForm::Continuity;
     ph.extrapolated_wall_pressure = scene.simulation.method == Method::Wcsph && wall_pressure(scene) == WallPressure::Extrapolated;

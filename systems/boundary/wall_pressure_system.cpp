@@ -17,9 +17,9 @@ namespace sph {
 
 Access WallPressureSystem::access() const {
     return Access()
-        .read(fluid(comp::position), fluid(comp::density), fluid(comp::pressure), res::fluid_grid,
-              res::boundary_neighbours, boundary(comp::position))
-        .read_if(m_individual, res::active_set)
+        .read(fluid(comp::position), fluid(comp::density), fluid(comp::pressure), res::boundary_neighbours,
+              boundary(comp::position))
+        .read_if(m_individual, res::active_set, res::fluid_grid)
         .write(boundary(comp::pressure), boundary(comp::density));
 }
 
@@ -36,7 +36,8 @@ void WallPressureSystem::run(Context& ctx) {
     auto pb = ctx.write(boundary(comp::pressure));
     auto rhob = ctx.write(boundary(comp::density));
     const NeighbourLists& lists = ctx.read(res::boundary_neighbours);
-    const UniformGrid& grid = ctx.read(res::fluid_grid);
+    // The grid: only the per-particle modes' gather around the active rows' walls reads it.
+    const UniformGrid* grid = m_individual ? &ctx.read(res::fluid_grid) : nullptr;
     const Physics& ph = ctx.physics();
     const CubicSpline& kernel = ctx.kernel();
     const Real h2 = ph.h * ph.h, rho0 = ph.rest_density, b_eos = ph.tait_b;
@@ -110,7 +111,7 @@ void WallPressureSystem::run(Context& ctx) {
             m_mark[b] = 0;
             const Vec3 at = xb[b];
             Real num = 0, den = 0;
-            grid.for_each_candidate(at, x, [&](Index f, const Vec3& xf) {
+            grid->for_each_candidate(at, x, [&](Index f, const Vec3& xf) {
                 const Real r2 = (at - xf).squaredNorm();
                 if (r2 >= h2) return;
                 const Real w = weight(r2);

@@ -55,11 +55,12 @@ void FactorSums(const DfsphPairArgs& a, std::size_t begin, std::size_t end, Real
     using D = decltype(d);
     const KernelV<D> k(d, *a.kernel);
     const auto vol = hn::Set(d, a.volume);
-    const bool viscous = a.acc && a.alpha > 0;
+    const bool viscous = a.acc && (a.alpha > 0 || a.alpha_b > 0);
     const auto m = hn::Set(d, a.mass), rho0 = hn::Set(d, a.rest_density);
     const auto rho_sum = hn::Set(d, a.rest_density + a.rest_density);
     const auto eps_h2 = hn::Set(d, Real(0.01) * a.h * a.h);
     const auto alpha_2hc = hn::Set(d, Real(2) * a.alpha * a.h * a.speed_of_sound);
+    const auto alpha_b_2hc = hn::Set(d, Real(2) * a.alpha_b * a.h * a.speed_of_sound);
     for (std::size_t i = begin; i < end; ++i) {
         const Broadcast3<D> xi = broadcast3(d, a.x + 3 * i);
         const Broadcast3<D> vi = viscous ? broadcast3(d, a.v + 3 * i) : Broadcast3<D>{};
@@ -67,8 +68,9 @@ void FactorSums(const DfsphPairArgs& a, std::size_t begin, std::size_t end, Real
         Broadcast3<D> g{hn::Zero(d), hn::Zero(d), hn::Zero(d)}, gb{hn::Zero(d), hn::Zero(d), hn::Zero(d)};
         Broadcast3<D> visc{hn::Zero(d), hn::Zero(d), hn::Zero(d)};
         // a -= coef grad W with grad W = gf x (gf the masked gradient factor).
-        auto viscous_pair = [&](const PairChunk<D>& c, hn::Vec<D> vx, hn::Vec<D> weight, hn::Vec<D> gf) {
-            const auto coef = hn::Mul(hn::Mul(weight, monaghan(vx, c.r2, alpha_2hc, rho_sum, eps_h2)), gf);
+        auto viscous_pair = [&](const PairChunk<D>& c, hn::Vec<D> vx, hn::Vec<D> weight, hn::Vec<D> gf,
+                                hn::Vec<D> a2hc) {
+            const auto coef = hn::Mul(hn::Mul(weight, monaghan(vx, c.r2, a2hc, rho_sum, eps_h2)), gf);
             visc.x = hn::NegMulAdd(coef, c.dx, visc.x);
             visc.y = hn::NegMulAdd(coef, c.dy, visc.y);
             visc.z = hn::NegMulAdd(coef, c.dz, visc.z);
@@ -86,7 +88,7 @@ void FactorSums(const DfsphPairArgs& a, std::size_t begin, std::size_t end, Real
             if (viscous) {
                 const Broadcast3<D> vj = gather3(d, a.v, c.j3);
                 viscous_pair(c, dot3(hn::Sub(vi.x, vj.x), hn::Sub(vi.y, vj.y), hn::Sub(vi.z, vj.z), c.dx, c.dy, c.dz), m,
-                             gf);
+                             gf, alpha_2hc);
             }
             g.x = hn::Add(g.x, gx);
             g.y = hn::Add(g.y, gy);
@@ -116,7 +118,8 @@ void FactorSums(const DfsphPairArgs& a, std::size_t begin, std::size_t end, Real
                     fb = hn::Add(fb, dot3(vb3.x, vb3.y, vb3.z, gx, gy, gz));
                     vib = {hn::Sub(vi.x, vb3.x), hn::Sub(vi.y, vb3.y), hn::Sub(vi.z, vb3.z)};
                 }
-                if (viscous) viscous_pair(c, dot3(vib.x, vib.y, vib.z, c.dx, c.dy, c.dz), hn::Mul(rho0, vb), gf);
+                if (viscous)
+                    viscous_pair(c, dot3(vib.x, vib.y, vib.z, c.dx, c.dy, c.dz), hn::Mul(rho0, vb), gf, alpha_b_2hc);
             }
         }
         const std::size_t q = i - begin;

@@ -40,8 +40,9 @@ struct DfsphPairArgs {
     const CubicSpline* kernel = nullptr;
     Real volume = 0;  ///< V = m / rho0 of a fluid particle
     /// Viscosity in the factor pass (NonpressureForcesSystem's Becker & Teschner 2007 eq. 10-11
-    /// with rho_i = rho_j = rho0, and Akinci's boundary term): alpha > 0 and `acc` set.
-    Real mass = 0, rest_density = 0, alpha = 0, speed_of_sound = 0, h = 0;
+    /// with rho_i = rho_j = rho0, and Akinci's boundary term with alpha_b, the walls' alpha):
+    /// alpha or alpha_b > 0 and `acc` set.
+    Real mass = 0, rest_density = 0, alpha = 0, alpha_b = 0, speed_of_sound = 0, h = 0;
     Real* acc = nullptr;  ///< written with the viscous acceleration (xyz per particle)
 };
 

@@ -165,12 +165,14 @@ void DfsphFactorSystem::run(Context& ctx) {
     const std::span<const Vec3> v = m_viscosity ? ctx.read(fluid(comp::velocity)) : std::span<const Vec3>{};
     const std::span<Vec3> visc = m_viscosity ? ctx.write(fluid(comp::nonpressure_acceleration)) : std::span<Vec3>{};
     const Real alpha = m_viscosity ? ph.viscosity : Real(0), c_s = ph.speed_of_sound, h = ph.h;
+    const Real alpha_b = m_viscosity ? ph.boundary_viscosity : Real(0);  // against the walls (0: free-slip)
     if (m_viscosity) {
         p.args.v = v.empty() ? nullptr : v.data()->data();
         p.args.acc = visc.empty() ? nullptr : visc.data()->data();
         p.args.mass = m;
         p.args.rest_density = rho0;
         p.args.alpha = alpha;
+        p.args.alpha_b = alpha_b;
         p.args.speed_of_sound = c_s;
         p.args.h = h;
     }
@@ -219,9 +221,9 @@ void DfsphFactorSystem::run(Context& ctx) {
                         const Vec3 gib = p.vol_b[b] * kernel.grad(xib, rib);
                         bgrad += gib;
                         if (!p.velb.empty()) flux += p.velb[b].dot(gib);
-                        if (alpha > 0) {
+                        if (alpha_b > 0) {
                             const Vec3 vib = p.velb.empty() ? v[i] : Vec3(v[i] - p.velb[b]);
-                            const Real pi = monaghan_pi(vib.dot(xib), xib.squaredNorm(), alpha, c_s, h, rho0, rho0);
+                            const Real pi = monaghan_pi(vib.dot(xib), xib.squaredNorm(), alpha_b, c_s, h, rho0, rho0);
                             if (pi != Real(0)) a -= (rho0 * p.vol_b[b] * pi) * kernel.grad(xib, rib);
                         }
                     }

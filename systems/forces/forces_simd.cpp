@@ -264,7 +264,8 @@ void PressureForceRows(const PressurePairArgs& a, std::size_t begin, std::size_t
 }
 
 // Becker & Teschner 2007 eq. 10-11 (nu = 2 alpha h c_s / (2 rho0)) and eq. 13:
-// a_i = -sum_j m Pi_ij grad W_ij - kappa sum_j W_ij x_ij - sum_b rho0 V_b Pi_ib grad W_ib.
+// a_i = -sum_j m Pi_ij grad W_ij - kappa sum_j W_ij x_ij - sum_b rho0 V_b Pi_ib grad W_ib, the
+// last with the boundary's alpha_b (fluid.boundary_viscosity; 0: free-slip walls).
 void NonpressureRows(const NonpressurePairArgs& a, std::size_t begin, std::size_t end) {
     hn::ScalableTag<Real> d;
     using D = decltype(d);
@@ -274,8 +275,9 @@ void NonpressureRows(const NonpressurePairArgs& a, std::size_t begin, std::size_
     const auto rho_sum = hn::Set(d, a.rest_density + a.rest_density);
     const auto eps_h2 = hn::Set(d, Real(0.01) * a.h * a.h);
     const auto alpha_2hc = hn::Set(d, Real(2) * a.alpha * a.h * a.speed_of_sound);
+    const auto alpha_b_2hc = hn::Set(d, Real(2) * a.alpha_b * a.h * a.speed_of_sound);
     const auto kappa = hn::Set(d, a.kappa);
-    const bool viscous = a.alpha > 0, cohesive = a.kappa > 0;
+    const bool viscous = a.alpha > 0, viscous_b = a.alpha_b > 0, cohesive = a.kappa > 0;
     for (std::size_t i = begin; i < end; ++i) {
         const Broadcast3<D> xi = broadcast3(d, a.x + 3 * i);
         const Broadcast3<D> vi = broadcast3(d, a.v + 3 * i);
@@ -294,7 +296,7 @@ void NonpressureRows(const NonpressurePairArgs& a, std::size_t begin, std::size_
             if (cohesive)  // a -= kappa W_ij x_ij: the "gradient" factor is 1
                 subtract_along_gradient(c, hn::Set(d, Real(1)), hn::IfThenElseZero(c.in, hn::Mul(kappa, k.w(d, r))), acc);
         }
-        if (a.xb && viscous) {
+        if (a.xb && viscous_b) {
             const Index* blist = a.boundary->of(Index(i)).data();
             const std::size_t bcount = a.boundary->size_of(Index(i));
             for (std::size_t k0 = 0; k0 < bcount; k0 += hn::Lanes(d)) {
@@ -302,7 +304,7 @@ void NonpressureRows(const NonpressurePairArgs& a, std::size_t begin, std::size_
                 const Broadcast3<D> vib = relative_velocity(d, vi, a.vel_b, c);  // v_i - v_b
                 const auto psi = hn::Mul(rho0, hn::GatherIndex(d, a.volume_b, c.j));
                 const auto coef = hn::IfThenElseZero(
-                    c.in, hn::Mul(psi, monaghan(dot3(vib.x, vib.y, vib.z, c.dx, c.dy, c.dz), c.r2, alpha_2hc, rho_sum,
+                    c.in, hn::Mul(psi, monaghan(dot3(vib.x, vib.y, vib.z, c.dx, c.dy, c.dz), c.r2, alpha_b_2hc, rho_sum,
                                                 eps_h2)));
                 subtract_along_gradient(c, hn::IfThenElseZero(c.in, k.grad_factor(d, hn::Sqrt(c.r2))), coef, acc);
             }

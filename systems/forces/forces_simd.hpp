@@ -88,6 +88,7 @@ struct NonpressurePairArgs {
     const NeighbourLists* boundary = nullptr;
     const CubicSpline* kernel = nullptr;
     Real mass = 0, alpha = 0, speed_of_sound = 0, h = 0, rest_density = 0, kappa = 0;
+    Real alpha_b = 0;     ///< Monaghan alpha against boundary particles (fluid.boundary_viscosity)
     Real* acc = nullptr;  ///< written, xyz per particle
 };
 

@@ -43,6 +43,7 @@ void NonpressureForcesSystem::run(Context& ctx) {
     const CubicSpline& kernel = ctx.kernel();
     const Physics& ph = ctx.physics();
     const Real m = ph.mass, alpha = ph.viscosity, c = ph.speed_of_sound, h = ph.h, rho0 = ph.rest_density;
+    const Real alpha_b = ph.boundary_viscosity;  // against the walls (0: free-slip)
     const Real kappa = Real(m_surface_tension);
     // The vectorised loop (simulation.simd) sums the same terms as the scalar loop below.
     NonpressurePairArgs vec;
@@ -58,6 +59,7 @@ void NonpressureForcesSystem::run(Context& ctx) {
     vec.kernel = &kernel;
     vec.mass = m;
     vec.alpha = alpha;
+    vec.alpha_b = alpha_b;
     vec.speed_of_sound = c;
     vec.h = h;
     vec.rest_density = rho0;
@@ -78,12 +80,12 @@ void NonpressureForcesSystem::run(Context& ctx) {
                 }
                 if (kappa > 0) a -= (kappa * kernel.w(d)) * xij;
             }
-            if (with_boundary && alpha > 0)
+            if (with_boundary && alpha_b > 0)
                 for (Index b : boundary_nb->of(Index(i))) {
                     const Vec3 xib = xi - xb[b];
                     const Real r2 = xib.squaredNorm();
                     const Vec3 vib = velb.empty() ? vi : Vec3(vi - velb[b]);
-                    const Real pi = monaghan_pi(vib.dot(xib), r2, alpha, c, h, rho0, rho0);
+                    const Real pi = monaghan_pi(vib.dot(xib), r2, alpha_b, c, h, rho0, rho0);
                     if (pi != Real(0)) a -= (rho0 * vol[b] * pi) * kernel.grad(xib, std::sqrt(r2));
                 }
             out[i] = a;

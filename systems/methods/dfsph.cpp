@@ -54,7 +54,8 @@ Recipe make_dfsph_recipe(const Scene& scene) {
     const bool boundary = !scene.boundaries.empty();
     const bool moving = has_moving_boundaries(scene);
     const bool adaptive = scene.simulation.stepping.mode == SteppingMode::Adaptive;
-    const bool nonpressure = artificial_viscosity(scene) > 0 || scene.fluid.surface_tension > 0;
+    const bool viscous = artificial_viscosity(scene) > 0 || (boundary && boundary_artificial_viscosity(scene) > 0);
+    const bool nonpressure = viscous || scene.fluid.surface_tension > 0;
     const DfsphParams& p = scene.dfsph;
 
     Recipe r;
@@ -70,7 +71,7 @@ Recipe make_dfsph_recipe(const Scene& scene) {
     if (boundary) r.step.push_back(std::make_unique<BoundaryNeighbourSystem>());
     // Viscosity alone rides on the factor pass (dfsph_systems.hpp); surface tension takes the
     // separate non-pressure system, viscosity included.
-    const bool fused_viscosity = artificial_viscosity(scene) > 0 && scene.fluid.surface_tension == 0;
+    const bool fused_viscosity = viscous && scene.fluid.surface_tension == 0;
     r.step.push_back(std::make_unique<DfsphFactorSystem>(boundary, moving, fused_viscosity));
     if (p.divergence) {
         r.step.push_back(std::make_unique<DfsphWarmStartSystem>(DfsphSolver::Divergence, p.warm_start));

@@ -43,7 +43,8 @@ Recipe make_pcisph_recipe(const Scene& scene) {
     c.ihmsen = c.boundary && scene.boundary.handling == BoundaryHandling::Ihmsen;
     c.moving = has_moving_boundaries(scene);
     c.adaptive = scene.simulation.stepping.mode == SteppingMode::Adaptive;
-    c.nonpressure = artificial_viscosity(scene) > 0 || scene.fluid.surface_tension > 0;
+    c.nonpressure = artificial_viscosity(scene) > 0 || (c.boundary && boundary_artificial_viscosity(scene) > 0) ||
+                    scene.fluid.surface_tension > 0;
 
     Recipe r;
     if (c.boundary) r.setup.push_back(std::make_unique<BoundaryVolumeSystem>());

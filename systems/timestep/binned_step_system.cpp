@@ -306,11 +306,16 @@ void BinnedStepSystem::run(Context& ctx) {
                     auto& out = woken.local();
                     for (std::size_t k = r.begin(); k < r.end(); ++k) {
                         const Index i = m_wake[k];
-                        const int cap = bin[i] + 2;
+                        // Relaxed atomic loads: other tasks may lower these bins meanwhile (a
+                        // row is in several lists); the passes repeat to the fixed point.
+                        const auto load = [&](Index r) {
+                            return int(std::atomic_ref<std::uint8_t>(bin[r]).load(std::memory_order_relaxed));
+                        };
+                        const int cap = load(i) + 2;
                         for (Index j : lists.of(i))
                             // An active j never exceeds cap (the limiter's fixed point), so
                             // the activity flag is read only for the rare candidates.
-                            if (bin[j] > cap && !active[j] && atomic_lower(bin[j], std::uint8_t(cap))) {
+                            if (load(j) > cap && !active[j] && atomic_lower(bin[j], std::uint8_t(cap))) {
                                 out.push_back(j);
                                 any = true;
                             }

@@ -19,6 +19,7 @@
 #include "systems/neighbours/fluid_grid_system.hpp"
 #include "systems/neighbours/fluid_neighbours_system.hpp"
 #include "systems/dfsph/dfsph_systems.hpp"
+#include "systems/forces/nonpressure_forces_system.hpp"
 #include "test_scenes.hpp"
 #include "engine/core/errors.hpp"
 
@@ -265,6 +266,7 @@ double max_rel(std::span<const Vec3> a, std::span<const Vec3> b) {
 TEST(DfsphPaths, VectorisedPassesMatchScalarWithMovingBody) {
     Scene s = dfsph_scene(test::tank_scene(Vec3d(0.2, 0.25, 0.1), Vec3d(0.5, 0.3, 0.1), 0.005), SteppingMode::Adaptive);
     s.fluid.viscosity = 0.05;
+    s.fluid.boundary_viscosity = 0.15;  // the walls' own alpha, apart from the fluid's
     BoundaryDesc body;
     body.shape = BoundaryShape::Box;
     body.box = Aabb{Vec3d(0.3, 0.0, 0.0), Vec3d(0.34, 0.12, 0.1)};
@@ -302,6 +304,14 @@ TEST(DfsphPaths, VectorisedPassesMatchScalarWithMovingBody) {
                     d_rho, d_f, d_gb, d_flux, flux_max, d_visc);
         ASSERT_GT(flux_max, 0.1) << "the moving box is not near the fluid: the flux is untested";
         for (const double d : {d_rho, d_f, d_gb, d_flux, d_visc}) EXPECT_LT(d, 2e-5);
+        // The fused viscosity is NonpressureForcesSystem's (checked against a brute force there),
+        // the walls' term with fluid.boundary_viscosity: the scalar loops of both, 2e-5 as above.
+        w.physics.simd = false;
+        run_system(NonpressureForcesSystem(true, true, 0.0), w);
+        const double d_np = max_rel(w.fluid.store.get(comp::nonpressure_acceleration), visc);
+        std::printf("dfsph fused viscosity against the non-pressure system: %.2e\n", d_np);
+        EXPECT_LT(d_np, 2e-5);
+        w.physics.simd = true;
 
         for (const DfsphSolver solver : {DfsphSolver::Divergence, DfsphSolver::Density}) {
             DfsphSourceSystem source(solver, true, true);

@@ -22,6 +22,7 @@ TEST(NonpressureForces, EqualsBruteForce) {
     s.simulation.method = Method::Pcisph;
     s.simulation.stepping.mode = SteppingMode::Constant;
     s.fluid.viscosity = 0.1;
+    s.fluid.boundary_viscosity = 0.3;  // the walls' own alpha (fluid.boundary_viscosity), not the fluid's
     s.fluid.surface_tension = 0.5;
     auto sim = make_simulation(s);
     World& w = sim->world();
@@ -47,7 +48,7 @@ TEST(NonpressureForces, EqualsBruteForce) {
     const auto a = w.fluid.store.get(comp::nonpressure_acceleration);
     const auto xb = w.boundary.store.get(comp::position);
     const auto vol = w.boundary.store.get(comp::volume);
-    const double h = w.physics.h, m = w.physics.mass, rho0 = w.physics.rest_density, alpha = 0.1, kappa = 0.5;
+    const double h = w.physics.h, m = w.physics.mass, rho0 = w.physics.rest_density, kappa = 0.5;
     const double c = w.physics.speed_of_sound;
     const double sigma = 8.0 / (3.14159265358979323846 * h * h * h);
     auto W = [&](double r) {
@@ -61,7 +62,7 @@ TEST(NonpressureForces, EqualsBruteForce) {
         const double dwdq = q <= 0.5 ? sigma * (18 * q * q - 12 * q) : -6 * sigma * (1 - q) * (1 - q);
         return d / r * dwdq / h;
     };
-    auto pi = [&](const Eigen::Vector3d& vij, const Eigen::Vector3d& xij) {
+    auto pi = [&](const Eigen::Vector3d& vij, const Eigen::Vector3d& xij, double alpha = 0.1) {
         const double vx = vij.dot(xij);
         if (vx >= 0) return 0.0;
         return -(2 * alpha * h * c / (2 * rho0)) * vx / (xij.squaredNorm() + 0.01 * h * h);
@@ -80,7 +81,7 @@ TEST(NonpressureForces, EqualsBruteForce) {
         for (std::size_t b = 0; b < xb.size(); ++b) {
             const Eigen::Vector3d xib = xi - xb[b].cast<double>();
             if (xib.norm() >= h) continue;
-            ref[i] -= rho0 * vol[b] * pi(vi, xib) * gradW(xib);
+            ref[i] -= rho0 * vol[b] * pi(vi, xib, 0.3) * gradW(xib);
         }
         amax = std::max(amax, ref[i].norm());
     }
