@@ -303,6 +303,7 @@ void restore_checkpoint(Simulation& sim, const Checkpoint& ck) {
         if (key.rfind("resource/", 0) == 0 && !w.resources.has(key.substr(9)))
             throw CheckpointError(ck.file.string() + ": section '" + key +
                                   "' is a resource this scene's method does not have");
+    sim.forget_history();  // the rollback ring held states of the world before the restore
 }
 
 }  // namespace sph

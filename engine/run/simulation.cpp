@@ -3,6 +3,7 @@
 #include <chrono>
 
 #include <tbb/blocked_range.h>
+#include <spdlog/spdlog.h>
 #include <tbb/parallel_reduce.h>
 
 #include <cmath>
@@ -298,6 +299,11 @@ void Simulation::step_once() {
     ++m_world.clock.step;
 }
 
+void Simulation::forget_history() {
+    if (m_ring) m_ring->clear();
+    m_restored_at = m_world.clock.step;
+}
+
 void Simulation::serve_rollback() {
     // Back to the state `m_rollback_steps` steps ago (the particle columns, the clock and the
     // Kept resources), resumed with the step the requesting system asked for. The step counter
@@ -314,7 +320,11 @@ void Simulation::serve_rollback() {
            << m_world.stats.a_max_particle;
         throw SimulationError(os.str(), m_world.stats.a_max_particle, discarded.step, rb.requested_by);
     }
-    m_ring->restore(m_world, m_rollback_steps);
+    const std::size_t went = m_ring->restore(m_world, m_rollback_steps);
+    if (went < m_rollback_steps && m_restored_at >= 0)
+        spdlog::warn("step {}: a rollback of {} steps reached {} (the run resumed from a checkpoint at step {}, which "
+                     "holds one state); from here the run may differ from an uninterrupted one",
+                     discarded.step, m_rollback_steps, went, m_restored_at);
     m_world.clock.step = discarded.step + 1;
     m_world.clock.rollbacks = discarded.rollbacks + 1;
     m_last.rolled_back = true;

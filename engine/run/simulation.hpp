@@ -61,6 +61,11 @@ public:
     /// @brief Makes run_until return after the step in progress (safe from another thread or
     /// a signal handler's flag check; the state stays consistent, ready to be written).
     void request_stop() { m_stop.store(true, std::memory_order_relaxed); }
+    /// @brief The world was replaced from outside (restore_checkpoint): the rollback ring's states
+    /// belong to the old one and are dropped. A checkpoint holds one state, so a rollback in the
+    /// first steps after it reaches back at most to it (a recipe's depth of 2: an uninterrupted
+    /// run would go one step further); the run logs a warning when that happens.
+    void forget_history();
 
     World& world() { return m_world; }
     const World& world() const { return m_world; }
@@ -112,6 +117,7 @@ private:
     StepRecord m_last;
     std::size_t m_rollback_steps = 0;
     std::unique_ptr<StateRing> m_ring;
+    std::int64_t m_restored_at = -1;  ///< the step a checkpoint restored (forget_history), or -1
     /// A fault of the step: system (recipe index), particle (row), column.
     struct Fault {
         std::size_t system = SIZE_MAX;

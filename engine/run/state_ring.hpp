@@ -19,6 +19,8 @@ public:
     void save(const World& w);
     /// @brief Number of states held.
     std::size_t size() const { return m_count; }
+    /// @brief Drops every state (the world was replaced, e.g. by a checkpoint's).
+    void clear() { m_count = m_next = 0; }
     /// @brief Restores the state saved `back` saves ago (1: the newest), or the oldest held if
     /// fewer are held, and drops the states newer than it. Returns how many saves back it went
     /// (0 when the ring is empty and nothing was restored).

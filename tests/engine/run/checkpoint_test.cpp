@@ -9,6 +9,7 @@
 #include <iterator>
 
 #include "engine/run/checkpoint.hpp"
+#include "engine/run/state_ring.hpp"
 #include "engine/data/components.hpp"
 #include "systems/methods/recipes.hpp"
 #include "test_scenes.hpp"
@@ -282,4 +283,40 @@ TEST(Checkpoint, DamagedFilesAreRefusedWithTheReason) {
                   .find("the boundary particles differ from this scene's sampling"),
               std::string::npos);
     fs::remove_all(k_dir);
+}
+
+// The rollback ring after the world was replaced (restore_checkpoint calls
+// Simulation::forget_history): no state of the old world may be restored. Two states saved, the
+// ring cleared: a rollback restores nothing and leaves the world as it is; saved again, it
+// restores that new state.
+TEST(StateRing, ClearDropsEveryState) {
+    auto sim = make_simulation(stirred_tank(SteppingMode::Global));
+    World& w = sim->world();
+    // What a ring state holds (the columns and the clock; the lists are rebuilt every step).
+    auto held = [&] {
+        std::string s;
+        for (const ComponentStore* store : {&w.fluid.store, &w.boundary.store})
+            for (const auto& name : store->names()) {
+                const auto raw = store->raw(name);
+                s.append(reinterpret_cast<const char*>(raw.data()), raw.size());
+            }
+        s.append(reinterpret_cast<const char*>(&w.clock.t_ticks), sizeof w.clock.t_ticks);
+        return s;
+    };
+    StateRing ring(2);
+    ring.save(w);
+    sim->step();
+    ring.save(w);
+    ASSERT_EQ(ring.size(), 2u);
+    sim->step();
+    const std::string now = held();
+    ring.clear();
+    EXPECT_EQ(ring.size(), 0u);
+    EXPECT_EQ(ring.restore(w, 2), 0u);
+    EXPECT_TRUE(held() == now) << "a cleared ring restored a state";
+    ring.save(w);
+    sim->step();
+    ASSERT_FALSE(held() == now);
+    EXPECT_EQ(ring.restore(w, 2), 1u);  // only the state saved after the clear
+    EXPECT_TRUE(held() == now) << "the state saved after the clear";
 }
