@@ -76,20 +76,44 @@ std::string lists_section(const NeighbourLists& l) {
     return s;
 }
 
+/// @param rows the fluid rows (a list has at most that many: rows emitted since it was built have none)
+/// @param targets the rows its entries index (fluid or boundary particles): every entry read
+/// must lie below, so that a damaged file with a valid checksum cannot index out of bounds.
 void restore_lists(NeighbourLists& l, const std::string& data, const std::string& what,
-                   const std::filesystem::path& file) {
+                   const std::filesystem::path& file, std::size_t rows, std::size_t targets) {
     Cursor c(data, what, file);
     l.capacity = Index(c.get<std::uint64_t>());
     const auto nc = std::size_t(c.get<std::uint64_t>());
     const auto ni = std::size_t(c.get<std::uint64_t>());
+    const auto bad = [&](const std::string& why) {
+        return CheckpointError(file.string() + ": section '" + what + "' " + why);
+    };
+    if (nc > rows)
+        throw bad("holds lists of " + std::to_string(nc) + " rows, the fluid has " + std::to_string(rows));
+    if (l.capacity > 0 && ni != nc * std::size_t(l.capacity))
+        throw bad("holds " + std::to_string(ni) + " slab entries, expected rows x capacity = " +
+                  std::to_string(nc * std::size_t(l.capacity)));
     c.get_vector(l.count, nc);
     c.get_vector(l.indices, ni);
-    if (l.capacity > 0) return;
+    if (l.capacity > 0) {
+        for (std::size_t i = 0; i < nc; ++i) {
+            if (l.count[i] > l.capacity)
+                throw bad("row " + std::to_string(i) + " counts " + std::to_string(l.count[i]) +
+                          " neighbours, above the slab's capacity " + std::to_string(l.capacity));
+            for (std::size_t k = 0; k < l.count[i]; ++k)
+                if (l.indices[i * l.capacity + k] >= targets)
+                    throw bad("row " + std::to_string(i) + " names particle " +
+                              std::to_string(l.indices[i * l.capacity + k]) + " of " + std::to_string(targets));
+        }
+        return;
+    }
     std::uint64_t sum = 0;
     for (Index k : l.count) sum += k;
     if (sum != ni)
         throw CheckpointError(file.string() + ": section '" + what + "' holds " + std::to_string(ni) +
                               " neighbour entries, but its counts sum to " + std::to_string(sum));
+    for (Index j : l.indices)
+        if (j >= targets) throw bad("names particle " + std::to_string(j) + " of " + std::to_string(targets));
     std::vector<Index> entries, counts;
     entries.swap(l.indices);
     counts.swap(l.count);
@@ -262,13 +286,21 @@ void restore_checkpoint(Simulation& sim, const Checkpoint& ck) {
     }
     restore_store(w.fluid.store, "fluid", ck);
     restore_store(w.boundary.store, "boundary", ck);
-    restore_lists(w.fluid_neighbours, ck.sections.at("fluid_neighbours"), "fluid_neighbours", ck.file);
-    restore_lists(w.boundary_neighbours, ck.sections.at("boundary_neighbours"), "boundary_neighbours", ck.file);
+    const std::size_t n_fluid = w.fluid.size(), n_boundary = w.boundary.size();
+    restore_lists(w.fluid_neighbours, ck.sections.at("fluid_neighbours"), "fluid_neighbours", ck.file, n_fluid, n_fluid);
+    restore_lists(w.boundary_neighbours, ck.sections.at("boundary_neighbours"), "boundary_neighbours", ck.file, n_fluid,
+                  n_boundary);
     {
         Cursor c(ck.sections.at("active_set"), "active_set", ck.file);
         c.get_vector(w.active_set, ck.sections.at("active_set").size() / sizeof(Index));
         Cursor h(ck.sections.at("halo_set"), "halo_set", ck.file);
         h.get_vector(w.halo_set, ck.sections.at("halo_set").size() / sizeof(Index));
+        for (const auto* set : {&w.active_set, &w.halo_set})
+            for (Index i : *set)
+                if (i >= n_fluid)
+                    throw CheckpointError(ck.file.string() + ": section '" +
+                                          (set == &w.active_set ? "active_set" : "halo_set") + "' names particle " +
+                                          std::to_string(i) + " of " + std::to_string(n_fluid));
     }
     {
         const std::string& data = ck.sections.at("moving_bodies");
@@ -284,6 +316,10 @@ void restore_checkpoint(Simulation& sim, const Checkpoint& ck) {
             for (int a = 0; a < 3; ++a) b.bounds.min[a] = c.get<double>();
             for (int a = 0; a < 3; ++a) b.bounds.max[a] = c.get<double>();
             b.speed = c.get<double>();
+            if (!(b.begin <= b.end && b.end <= n_boundary))
+                throw CheckpointError(ck.file.string() + ": section 'moving_bodies' has a body of boundary rows [" +
+                                      std::to_string(b.begin) + ", " + std::to_string(b.end) + ") of " +
+                                      std::to_string(n_boundary));
         }
     }
     restore_step(w, ck.sections.at("step"), ck.file);

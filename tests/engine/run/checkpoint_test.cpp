@@ -270,6 +270,29 @@ TEST(Checkpoint, DamagedFilesAreRefusedWithTheReason) {
                   .find("missing.sphckpt: cannot open checkpoint file (No such file or directory)"),
               std::string::npos);
 
+    // Sections whose checksum is valid but whose indices are not (a crafted or mis-written file):
+    // a neighbour entry or an active row beyond the fluid, refused naming the section, before
+    // anything reads them.
+    {
+        Checkpoint ck = read_checkpoint(good);
+        std::string& lists = ck.sections.at("fluid_neighbours");
+        std::uint64_t nc = 0;
+        std::memcpy(&nc, lists.data() + 8, 8);
+        ASSERT_GT(nc, 0u);
+        const Index beyond = Index(sim->world().fluid.size() + 7);
+        std::memcpy(lists.data() + 24 + nc * sizeof(Index), &beyond, sizeof(Index));  // the first entry
+        auto fresh = make_simulation(s);
+        EXPECT_NE(checkpoint_error([&] { restore_checkpoint(*fresh, ck); })
+                      .find("section 'fluid_neighbours' "),
+                  std::string::npos);
+        Checkpoint ck2 = read_checkpoint(good);
+        ck2.sections.at("active_set").append(reinterpret_cast<const char*>(&beyond), sizeof(Index));
+        auto fresh2 = make_simulation(s);
+        EXPECT_NE(checkpoint_error([&] { restore_checkpoint(*fresh2, ck2); })
+                      .find("section 'active_set' names particle " + std::to_string(beyond)),
+                  std::string::npos);
+    }
+
     // A checkpoint of another method (individual registers more columns) is refused.
     auto other = make_simulation(stirred_tank(SteppingMode::Individual));
     EXPECT_NE(checkpoint_error([&] { restore_checkpoint(*other, read_checkpoint(good)); })

@@ -249,7 +249,7 @@ TEST(Probes, RatesAndCsvFromARun) {
     Recorder rec(dir, *sim);
     rec.begin(*sim);
     sim->run_until(0.1, [&](const Simulation& s) { rec.after_step(s); });
-    rec.finish(*sim, 1.0, 1);
+    const nlohmann::json summary = rec.finish(*sim, 1.0, 1);
     auto lines = [&](const char* name) {
         std::ifstream f(dir / "probes" / name);
         std::string line, header;
@@ -265,6 +265,18 @@ TEST(Probes, RatesAndCsvFromARun) {
     EXPECT_EQ(lines("height_2.csv").second, 3);
     EXPECT_EQ(lines("pressure_3.csv").first, "t,p,colour");
     EXPECT_EQ(lines("pressure_4.csv").first, "t,p,wall_particles");
+    // Sample k of a 20 Hz probe is taken at the end of the first step that reaches k / 20 s:
+    // t_k in [k / 20, k / 20 + the run's largest step).
+    const double dt_max = summary.at("max_dt_s").get<double>();
+    ASSERT_GT(dt_max, 0.0);
+    std::ifstream tip(dir / "probes" / "tip.csv");
+    std::string line;
+    std::getline(tip, line);
+    for (int k = 0; std::getline(tip, line); ++k) {
+        const double t = std::stod(line.substr(0, line.find(',')));
+        EXPECT_GE(t, k / 20.0 - 1e-12) << "sample " << k;
+        EXPECT_LT(t, k / 20.0 + dt_max) << "sample " << k;
+    }
 }
 
 TEST(Probes, SceneErrorsNameThePathAndWhatWasExpected) {
