@@ -71,24 +71,23 @@ expect(abs(b["evaluations_per_particle"] - b["steps"]) < 1e-6, "global evaluates
 # A synthetic folder where Morris et al.'s viscous limit binds: h 0.04 m, nu 0.1 m^2/s gives
 # 0.125 (h / 2)^2 / nu = 0.5 ms < lambda_c h / c_s = 2 ms; two steps of 1 ms, half the rows
 # evaluated in the second: E0 = 2 ms / 0.5 ms = 4, ratio 1.5 / 4.
-syn = tmp / "syn"; syn.mkdir()
-(syn / "summary.json").write_text(json.dumps({
-    "method": "wcsph", "stepping": "binned", "kept_steps": 2,
-    "physics": {"support_radius": 0.04, "speed_of_sound": 20.0, "kinematic_viscosity": 0.1},
-    "stepping_params": {"acoustic": True, "lambda_c": 1.0, "dt_max": 0.005}}))
-(syn / "stats.csv").write_text("step,dt,active_fraction,v_max,rolled_back\n0,0.001,1,0,0\n1,0.001,0.5,0,0\n")
+def synthetic(name, kept, nu, stats):
+    """A binned run folder: h 0.04 m, c_s 20 m/s, lambda_c 1, dt_max 5 ms, the given nu and stats.csv."""
+    d = tmp / name; d.mkdir()
+    (d / "summary.json").write_text(json.dumps({
+        "method": "wcsph", "stepping": "binned", "kept_steps": kept,
+        "physics": {"support_radius": 0.04, "speed_of_sound": 20.0, "kinematic_viscosity": nu},
+        "stepping_params": {"acoustic": True, "lambda_c": 1.0, "dt_max": 0.005}}))
+    (d / "stats.csv").write_text(stats)
+    return d
+syn = synthetic("syn", 2, 0.1, "step,dt,active_fraction,v_max,rolled_back\n0,0.001,1,0,0\n1,0.001,0.5,0,0\n")
 b = sb.bound(str(syn))
 expect(abs(b["dt_c"] - 5e-4) < 1e-12 and abs(b["ratio"] - 1.5 / 4) < 1e-12, f"Morris cap: {b}")
 # Mean speeds: h 0.04 m, c_s 20 m/s, lambda_c 1, no viscosity, dt_max 5 ms, so the bound is
 # 0.04 / (20 + vbar) s. Three 1 ms steps: every row at vbar 5 m/s (1 ms x 25 / 0.04 = 0.625
 # evaluations), every row at 60 m/s (2.0), half the rows at 60 m/s (not the whole fluid's mean:
 # counted at rest, 0.5): E0 = 3.125, made 2.5.
-spd = tmp / "spd"; spd.mkdir()
-(spd / "summary.json").write_text(json.dumps({
-    "method": "wcsph", "stepping": "binned", "kept_steps": 3,
-    "physics": {"support_radius": 0.04, "speed_of_sound": 20.0, "kinematic_viscosity": 0.0},
-    "stepping_params": {"acoustic": True, "lambda_c": 1.0, "dt_max": 0.005}}))
-(spd / "stats.csv").write_text("step,dt,active_fraction,v_max,v_mean\n0,0.001,1,9,5\n1,0.001,1,80,60\n2,0.001,0.5,80,60\n")
+spd = synthetic("spd", 3, 0.0, "step,dt,active_fraction,v_max,v_mean\n0,0.001,1,9,5\n1,0.001,1,80,60\n2,0.001,0.5,80,60\n")
 b = sb.bound(str(spd))
 expect(abs(b["bound_evaluations_per_particle"] - 3.125) < 1e-12 and abs(b["ratio"] - 2.5 / 3.125) < 1e-12
        and abs(b["bound_at_rest"] - 1.5) < 1e-12 and abs(b["speed_share"] - 2 / 3) < 1e-12, f"mean speeds: {b}")

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <utility>
 #include <vector>
 
 #include "engine/data/components.hpp"
@@ -127,19 +128,33 @@ TEST(BoundaryMotion, StaticSceneHasNoMotionMachinery) {
     EXPECT_TRUE(msim->world().boundary.store.has(comp::velocity.name));
 }
 
-// Akinci eq. 4 within each body: a moving body's volumes do not depend on where it is, so a
-// body's volumes equal those of the same body sampled alone (bit for bit: same particles,
-// same grid order of its own particles), whatever static wall it starts next to.
-TEST(BoundaryMotion, BodyVolumesAreItsOwn) {
+namespace {
+// A tank with a box body resting on its floor, and the same scene with the body lifted 0.15 m,
+// clear of every wall (PCISPH: at a constant step).
+std::pair<Scene, Scene> body_on_the_floor_and_alone(Method method) {
     Scene near_wall = test::tank_scene(Vec3d(0.2, 0.1, 0.2), Vec3d(0.4, 0.4, 0.2));
+    near_wall.simulation.method = method;
+    if (method == Method::Pcisph) {
+        near_wall.simulation.stepping.mode = SteppingMode::Constant;
+        near_wall.simulation.stepping.dt = 1e-4;
+    }
     BoundaryDesc box;
     box.shape = BoundaryShape::Box;
     box.box = Aabb{Vec3d(0.3, 0.0, 0.05), Vec3d(0.38, 0.2, 0.15)};  // touching the floor
     box.motion = linear_motion(Vec3d(0, 0.1, 0));
     near_wall.boundaries.push_back(box);
     Scene alone = near_wall;
-    alone.boundaries[1].box.min += Vec3d(0, 0.15, 0);  // lifted well clear of every wall
+    alone.boundaries[1].box.min += Vec3d(0, 0.15, 0);
     alone.boundaries[1].box.max += Vec3d(0, 0.15, 0);
+    return {near_wall, alone};
+}
+}  // namespace
+
+// Akinci eq. 4 within each body: a moving body's volumes do not depend on where it is, so a
+// body's volumes equal those of the same body sampled alone (bit for bit: same particles,
+// same grid order of its own particles), whatever static wall it starts next to.
+TEST(BoundaryMotion, BodyVolumesAreItsOwn) {
+    const auto [near_wall, alone] = body_on_the_floor_and_alone(Method::Wcsph);
     auto a = make_simulation(near_wall), b = make_simulation(alone);
     const MovingBody& ba = a->world().moving_bodies.at(0);
     const MovingBody& bb = b->world().moving_bodies.at(0);
@@ -165,18 +180,7 @@ TEST(BoundaryMotion, BodyVolumesAreItsOwn) {
 // away (computed once, so stale): 23 % off on the body and 21 % on the floor under it, measured
 // 2026-12-06 with the sum over every particle.
 TEST(BoundaryMotion, PcisphBoundaryDensityIsEachObjectsOwn) {
-    Scene near_wall = test::tank_scene(Vec3d(0.2, 0.1, 0.2), Vec3d(0.4, 0.4, 0.2));
-    near_wall.simulation.method = Method::Pcisph;
-    near_wall.simulation.stepping.mode = SteppingMode::Constant;
-    near_wall.simulation.stepping.dt = 1e-4;
-    BoundaryDesc box;
-    box.shape = BoundaryShape::Box;
-    box.box = Aabb{Vec3d(0.3, 0.0, 0.05), Vec3d(0.38, 0.2, 0.15)};  // touching the floor
-    box.motion = linear_motion(Vec3d(0, 0.1, 0));
-    near_wall.boundaries.push_back(box);
-    Scene alone = near_wall;
-    alone.boundaries[1].box.min += Vec3d(0, 0.15, 0);
-    alone.boundaries[1].box.max += Vec3d(0, 0.15, 0);
+    const auto [near_wall, alone] = body_on_the_floor_and_alone(Method::Pcisph);
     auto a = make_simulation(near_wall), b = make_simulation(alone);
     const World& wa = a->world();
     const World& wb = b->world();
