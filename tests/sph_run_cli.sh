@@ -87,6 +87,15 @@ ls -R "$tmp/nan" > "$tmp/nan.before"
 check "set-up failures (exit $rc, $rc8) leave the earlier run's outputs" \
   '[ $rc -eq 2 ] && [ $rc8 -eq 5 ] && cmp -s "$tmp/nan.before" <(ls -R "$tmp/nan") && grep -q "particle 5" "$tmp/nan/summary.json"'
 
+# 4c. Another method's section is still checked when --method replaces the scene's: a bad value
+#     set into it is an error naming the key, and a PCISPH scene runs as DFSPH with its own
+#     pcisph section left unused.
+"$run" "$src/scenes/dam_break.json" --method wcsph --set dfsph.eta=abc --end 0.002 --out "$tmp/m1" -q 2>"$tmp/err9"; rc=$?
+check "--method with a bad value in another method's section exits 2 naming it (got $rc)" \
+  '[ $rc -eq 2 ] && grep -q "/dfsph/eta: found \"abc\", expected a number" "$tmp/err9" && [ ! -e "$tmp/m1" ]'
+"$run" "$src/scenes/glass.json" --method dfsph --end 0.002 --out "$tmp/m2" -q; rc=$?
+check "a PCISPH scene with --method dfsph runs (got $rc)" '[ $rc -eq 0 ]'
+
 # 5. --help and --version.
 # (The output is captured first: `| grep -q` under pipefail fails when grep exits early and the
 # writer dies of SIGPIPE.)

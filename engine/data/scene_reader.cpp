@@ -219,10 +219,22 @@ class Reader {
                         {n.path, "/simulation/method"});
             for (std::size_t i = 0; i < v->size(); ++i) s.emitters.push_back(read_emitter({(*v)[i], child(n.path, i)}));
         }
-        if (const json* v = root.find("pcisph"); v && pcisph) read_pcisph(root.at(*v, "pcisph"), s.pcisph);
-        if (const json* v = root.find("dfsph"); v && s.simulation.method == Method::Dfsph)
-            read_dfsph(root.at(*v, "dfsph"), s.dfsph);
-        if (const json* v = root.find("boundary"); v && pcisph) read_boundary_params(root.at(*v, "boundary"), s.boundary);
+        // Another method's section (the method replaced on the command line) is still read, into a
+        // copy that is dropped: a typo or a bad value in it (or a `--set` into it) is reported,
+        // not silently ignored.
+        const bool dfsph = s.simulation.method == Method::Dfsph;
+        if (const json* v = root.find("pcisph")) {
+            auto unused = s.pcisph;
+            read_pcisph(root.at(*v, "pcisph"), pcisph ? s.pcisph : unused);
+        }
+        if (const json* v = root.find("dfsph")) {
+            auto unused = s.dfsph;
+            read_dfsph(root.at(*v, "dfsph"), dfsph ? s.dfsph : unused);
+        }
+        if (const json* v = root.find("boundary")) {
+            auto unused = s.boundary;
+            read_boundary_params(root.at(*v, "boundary"), pcisph ? s.boundary : unused);
+        }
         if (s.fluid.surface_tension > 0 && wcsph) {
             fail_at("/fluid/surface_tension", dump_at("/fluid/surface_tension"),
                     "0 or no key: surface tension (Becker & Teschner 2007) is implemented for methods "
