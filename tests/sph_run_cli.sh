@@ -96,6 +96,10 @@ check "--method with a bad value in another method's section exits 2 naming it (
 "$run" "$src/scenes/glass.json" --method dfsph --end 0.002 --out "$tmp/m2" -q; rc=$?
 check "a PCISPH scene with --method dfsph runs (got $rc)" '[ $rc -eq 0 ]'
 
+# 4d. Flags that contradict each other are refused, not resolved by their order.
+"$run" "$src/scenes/dam_break.json" --no-frames --frame-rate 100 --out "$tmp/m3" 2>"$tmp/err10"; rc=$?
+check "--no-frames with --frame-rate exits 2 (got $rc)" '[ $rc -eq 2 ] && grep -q "excludes" "$tmp/err10" && [ ! -e "$tmp/m3" ]'
+
 # 5. --help and --version.
 # (The output is captured first: `| grep -q` under pipefail fails when grep exits early and the
 # writer dies of SIGPIPE.)

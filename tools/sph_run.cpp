@@ -172,8 +172,9 @@ int main(int argc, char** argv) {
     app.add_option("--graph", graph_file, "Write the system graph as Graphviz dot to this file");
     app.add_option("--set", sets, "Override a scene value: --set simulation.stepping.lambda_v=0.1 (one per --set; repeatable)")
         ->allow_extra_args(false);
-    app.add_flag("--no-frames", no_frames, "Write no particle frames");
-    app.add_option("--frame-rate", frame_rate, "Frames per simulated second (overrides simulation.frame_rate; 0: none)");
+    auto* no_frames_flag = app.add_flag("--no-frames", no_frames, "Write no particle frames");
+    app.add_option("--frame-rate", frame_rate, "Frames per simulated second (overrides simulation.frame_rate; 0: none)")
+        ->excludes(no_frames_flag);
     app.add_option("--format", formats, "Frame formats, comma-separated: vtu,bgeo,ply (particles), vdb,mesh (surface) (overrides output.format)");
     app.add_flag("--force", force, "Replace outputs in --out that no sph-run run claims (or another run's, resuming)");
     app.footer(kHelpFooter);
