@@ -26,41 +26,6 @@ Real lattice_mass(const CubicSpline& kernel, Real spacing, Real rest_density) {
     return Real(rest_density / sum);
 }
 
-}  // namespace
-
-Aabb default_domain(const Scene& scene, double h) {
-    Aabb box{Vec3d::Constant(std::numeric_limits<double>::max()), Vec3d::Constant(std::numeric_limits<double>::lowest())};
-    auto grow = [&](const Vec3d& p) {
-        box.min = box.min.cwiseMin(p);
-        box.max = box.max.cwiseMax(p);
-    };
-    for (const auto& b : scene.boundaries) {
-        // A moving boundary covers its geometry swept by its displacement up to the end time.
-        Vec3d lo = Vec3d::Zero(), hi = Vec3d::Zero();
-        if (b.motion) std::tie(lo, hi) = displacement_bounds(*b.motion, scene.simulation.end_time);
-        if (b.shape == BoundaryShape::Sphere) {
-            grow(b.center - Vec3d::Constant(b.radius) + lo);
-            grow(b.center + Vec3d::Constant(b.radius) + hi);
-        } else {
-            grow(b.box.min + lo);
-            grow(b.box.max + hi);
-        }
-    }
-    for (const auto& f : scene.fluid_blocks) {
-        grow(f.box.min);
-        grow(f.box.max);
-    }
-    for (const auto& e : scene.emitters) {
-        grow(e.position - Vec3d::Constant(e.radius));
-        grow(e.position + Vec3d::Constant(e.radius));
-    }
-    if (box.min[0] > box.max[0]) box = Aabb{Vec3d::Zero(), Vec3d::Constant(1.0)};
-    box.min -= Vec3d::Constant(h);
-    box.max += Vec3d::Constant(h);
-    return box;
-}
-
-namespace {
 
 /// The fluid lattice of every block, in double precision (written to the store once c_s is known).
 struct FluidSample {
