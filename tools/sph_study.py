@@ -615,8 +615,10 @@ def main():
         proc = subprocess.run(cmd, capture_output=True, text=True)
         if proc.returncode != 0:
             print(f"sph-study: warning: plot_dt.py failed: {proc.stderr.strip()}", file=sys.stderr)
-    print(f"wrote {study.out / 'study.md'}, {study.out / 'study.csv'}, {study.out / 'pareto.png'}, "
-          f"{study.out / 'dt.png'}")
+    elif runs:
+        print(f"sph-study: warning: no dt.png: plot_dt.py is not beside {HERE / 'sph-study'}", file=sys.stderr)
+    wrote = [study.out / "study.md", study.out / "study.csv", study.out / "pareto.png", study.out / "dt.png"]
+    print("wrote " + ", ".join(str(f) for f in wrote if f.is_file()))
 
 
 if __name__ == "__main__":
