@@ -8,7 +8,14 @@ import json
 import re
 import sys
 
-data = json.load(open(sys.argv[1]))
+if len(sys.argv) != 2 or sys.argv[1] in ("-h", "--help"):
+    print(__doc__.strip(), file=sys.stderr if len(sys.argv) != 2 else sys.stdout)
+    sys.exit(0 if len(sys.argv) == 2 else 2)
+try:
+    with open(sys.argv[1]) as f:
+        data = json.load(f)
+except (OSError, json.JSONDecodeError) as e:
+    sys.exit(f"bench_table: {sys.argv[1]}: {e}")
 ctx = data["context"]
 # With --benchmark_repetitions a run has iteration rows and aggregate rows: keep the median
 # aggregate only; a run without repetitions has just its iteration row. Sorted by name, since

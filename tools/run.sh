@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs what is missing, builds Release and runs the default scene (scenes/dam_break.json).
-# Outputs: out/dam_break/{stats.csv,summary.json,frames/*.vtu}. Extra arguments go to sph-run.
+# Outputs: out/dam_break/{stats.csv,summary.json,frames/*.vtu}. Extra arguments go to sph-run
+# (not a scene or --out: those are passed here).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash tools/install_deps.sh

@@ -1,5 +1,6 @@
 // sph-run: runs one scene and writes stats.csv, summary.json and frames.
-// Exit codes: 0 ok, 2 bad input, 3 simulation failed, 5 an output could not be written,
+// Exit codes: 0 ok, 2 bad input, 3 simulation failed, 4 internal error (a bug), 5 an output could
+// not be written,
 // 128 + signal when stopped by SIGINT/SIGTERM (after writing the summary).
 #include <signal.h>
 #include <csignal>
@@ -74,6 +75,7 @@ Outputs (in --out, default out/<scene name>):
   are replaced only with --force.
 Exit codes:
   0 done   2 bad input (scene, option, checkpoint, folder)   3 the simulation failed
+  4 internal error (a bug in sph-run: please report the message)
   5 an output could not be written (disk full, read-only, path too long)
   130 / 143 stopped by SIGINT / SIGTERM after the step in progress (summary.json says "interrupted";
   a second signal stops at once)
@@ -165,7 +167,7 @@ int main(int argc, char** argv) {
     app.add_option("--mode", mode,
                    "Stepping mode: constant | global | individual | binned (wcsph); constant | adaptive (pcisph, dfsph)");
     app.add_option("--end", end_time, "Simulated end time in seconds (overrides simulation.end_time)");
-    app.add_option("--dt", dt, "Time step in seconds (constant mode; first step of global)");
+    app.add_option("--dt", dt, "Time step in seconds (constant mode only)");
     app.add_option("--scale", scale, "Particle-count multiplier (overrides simulation.scale)");
     app.add_option("--out", out_dir, "Output directory (default out/<scene name>)");
     app.add_option("--threads", threads, "Worker threads (default: all cores)");

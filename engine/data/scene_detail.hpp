@@ -58,7 +58,7 @@ inline constexpr std::array<const char*, 3> k_output_keys{"format", "attributes"
 inline constexpr std::array<const char*, 4> k_surface_keys{"voxel_size", "sphere_radius", "smoothing", "keep_volume"};
 
 inline constexpr const char* k_name_expected =
-    "a non-empty string without \"/\" (it names the output folder)";
+    "a non-empty string other than \".\" and \"..\", without \"/\" or \"\\\" (it names the output folder)";
 
 inline constexpr std::array<Method, 3> k_methods{Method::Wcsph, Method::Pcisph, Method::Dfsph};
 inline constexpr std::array<SteppingMode, 5> k_modes{SteppingMode::Constant, SteppingMode::Global,

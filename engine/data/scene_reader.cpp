@@ -522,6 +522,14 @@ class Reader {
                             " (Ihmsen 2010: eta_avg < delta_shock < eta_max)",
                         {d.path, child(n.path, "eta"), child(n.path, "eta_max")});
             p.delta_shock = x;
+        } else if (p.eta_max && !(4.0 * p.eta < *p.eta_max)) {
+            // The default delta_shock, 4 eta, must lie below eta_max as a set one must.
+            const std::string ep = child(n.path, "eta_max");
+            fail_at(ep, dump_at(ep),
+                    "a number > 4 eta = " + fmt_computed(4.0 * p.eta) +
+                        " (the default delta_shock; Ihmsen 2010: eta_avg < delta_shock < eta_max), or a delta_shock "
+                        "between eta and eta_max",
+                    {ep, child(n.path, "eta"), child(n.path, "delta_shock")});
         }
         if (p.loop == PcisphLoop::UntilConverged && p.max_iterations < p.iterations) {
             const std::string mp = child(n.path, "max_iterations");
