@@ -3,11 +3,13 @@
 // atomic writes leave no temporary file behind.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstring>
 #include <fstream>
 #include <iterator>
 #include <limits>
 #include <map>
+#include <random>
 #include <regex>
 #include <sstream>
 
@@ -361,6 +363,77 @@ TEST(Ply, ReadBackEqualsColumns) {
         ASSERT_EQ(ply_value<double>(f, i, "dt"), dt[i]);
         ASSERT_EQ(ply_value<std::uint8_t>(f, i, "active"), active[i]);
         ASSERT_EQ(ply_value<std::uint32_t>(f, i, "id"), id[i]);
+    }
+    std::filesystem::remove_all(dir);
+}
+
+// The store's rows follow the spatial sort, so ids are out of order in any run; every format
+// writes its points in id order (io.cpp, gather), each point carrying its own row's values.
+// Here the id column is a seeded shuffle of 0..n-1 (with a byte column `bin` as binned stepping
+// has): point k of each file must be the row whose id is k, in every array.
+TEST(Frames, PointsComeInIdOrderWithTheirOwnRowsValues) {
+    World w = filled_world();
+    const std::size_t n = w.fluid.size();
+    auto id = w.fluid.store.get(comp::id);
+    std::vector<std::uint32_t> perm(n);
+    for (std::size_t i = 0; i < n; ++i) perm[i] = std::uint32_t(i);
+    std::mt19937 rng(5);
+    std::shuffle(perm.begin(), perm.end(), rng);
+    std::copy(perm.begin(), perm.end(), id.begin());
+    ASSERT_FALSE(std::is_sorted(id.begin(), id.end()));
+    auto bin = w.fluid.store.add(comp::bin);
+    for (std::size_t i = 0; i < n; ++i) bin[i] = std::uint8_t(i % 17);
+    w.scene.output.attributes.push_back("bin");
+    std::vector<std::size_t> row_of(n);  // the row holding id k
+    for (std::size_t i = 0; i < n; ++i) row_of[id[i]] = i;
+    const auto dir = std::filesystem::temp_directory_path() / "sph_io_test_order";
+    std::filesystem::remove_all(dir);
+    write_frame(dir / "frame", w);
+    const auto x = w.fluid.store.get(comp::position);
+    const auto rho = w.fluid.store.get(comp::density);
+    const auto dt = w.fluid.store.get(comp::dt);
+    // VTU: every array, by its type.
+    const VtuArrays a = read_vtu(dir / "frame.vtu");
+    ASSERT_EQ(a.points, n);
+    const Real* px = reinterpret_cast<const Real*>(a.arrays.at("position").data());
+    const Real* pr = reinterpret_cast<const Real*>(a.arrays.at("density").data());
+    const double* pd = reinterpret_cast<const double*>(a.arrays.at("dt").data());
+    const auto* pb = reinterpret_cast<const std::uint8_t*>(a.arrays.at("bin").data());
+    const auto* pi = reinterpret_cast<const std::uint32_t*>(a.arrays.at("id").data());
+    for (std::size_t k = 0; k < n; ++k) {
+        const std::size_t i = row_of[k];
+        ASSERT_EQ(pi[k], k);
+        for (int c = 0; c < 3; ++c) ASSERT_EQ(px[3 * k + c], x[i][c]) << "point " << k;
+        ASSERT_EQ(pr[k], rho[i]) << "point " << k;
+        ASSERT_EQ(pd[k], dt[i]) << "point " << k;
+        ASSERT_EQ(pb[k], bin[i]) << "point " << k;
+    }
+    // PLY and BGEO: the same rows.
+    const PlyFile f = read_ply(dir / "frame.ply");
+    const BgeoFile b = read_bgeo(dir / "frame.bgeo");
+    ASSERT_EQ(f.vertices, n);
+    ASSERT_EQ(std::size_t(b.points), n);
+    const auto bgeo_at = [&](const std::string& name) {  // the word index of an attribute (after P's 4)
+        std::size_t w0 = 4;
+        for (std::size_t k = 0; k < b.names.size(); ++k) {
+            if (b.names[k] == name) return w0;
+            w0 += std::size_t(b.sizes[k]);
+        }
+        ADD_FAILURE() << "no " << name << " in the BGEO file";
+        return w0;
+    };
+    const std::size_t b_rho = bgeo_at("density"), b_bin = bgeo_at("bin"), b_id = bgeo_at("id");
+    for (std::size_t k = 0; k < n; ++k) {
+        const std::size_t i = row_of[k];
+        ASSERT_EQ(ply_value<std::uint32_t>(f, k, "id"), k);
+        ASSERT_EQ(ply_value<Real>(f, k, "x"), x[i].x()) << "point " << k;
+        ASSERT_EQ(ply_value<Real>(f, k, "density"), rho[i]) << "point " << k;
+        ASSERT_EQ(ply_value<std::uint8_t>(f, k, "bin"), bin[i]) << "point " << k;
+        const auto& r = b.words[k];
+        ASSERT_EQ(r[b_id], k);
+        ASSERT_EQ(as_float(r[0]), float(x[i].x())) << "point " << k;
+        ASSERT_EQ(as_float(r[b_rho]), float(rho[i])) << "point " << k;
+        ASSERT_EQ(r[b_bin], std::uint32_t(bin[i])) << "point " << k;
     }
     std::filesystem::remove_all(dir);
 }
