@@ -84,7 +84,8 @@ FluidSample sample_fluid(const Scene& scene, double r) {
     return f;
 }
 
-/// Boundary particles, sampled once at the fluid spacing r0 = 2 r = h / 2: the static
+/// Boundary particles, sampled once at the fluid spacing 2 r (Ihmsen sec. 3.2's r0; h / 2 at the
+/// default fluid.support of 2): the static
 /// boundaries first, then each moving boundary as one contiguous range (a moving body).
 /// Returns the sampled positions (double precision). The normals are not kept: only the
 /// methods that read them register the column (ensure_boundary_normals).

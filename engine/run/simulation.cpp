@@ -189,7 +189,10 @@ void Simulation::trace_non_finite(std::size_t system) {
                             [&](std::size_t b, std::size_t e) { return box.any_outside(x.data() + b, e - b); });
             if (bad == n) continue;
             if (finite(x[bad])) {
-                record(m_outside, bad, col);
+                {
+                    std::lock_guard lock(m_trace_mutex);
+                    if (system < m_outside.system) m_outside = Fault{system, bad, col, x[bad]};
+                }
                 // A non-finite position further on outranks it (the rare path: a second read).
                 bad = first_row(n, rows, [&](std::size_t i) { return !finite(x[i]); });
                 if (bad == n) continue;
@@ -400,7 +403,7 @@ void Simulation::check_step() {
         // Left the domain: named with the system that moved it there.
         const std::string culprit = systems[m_outside.system]->name();
         const std::uint32_t id = id_of(m_outside.particle);
-        const Vec3 x = w.fluid.store.get(comp::position)[m_outside.particle];
+        const Vec3 x = m_outside.position;
         const Aabb& d = w.domain;
         os << "particle " << id << " left the domain at step " << w.clock.step << " (t = " << w.clock.t
            << " s): position (" << x.transpose() << ") is outside [" << d.min.transpose() << "] - ["

@@ -123,6 +123,9 @@ private:
         std::size_t system = SIZE_MAX;
         std::size_t particle = 0;
         std::string column;
+        /// The position found outside the domain, as the system left it (a later system, such
+        /// as a collision net, may move the particle before the step's end is checked).
+        Vec3 position = Vec3::Zero();
     };
     std::mutex m_trace_mutex;
     Fault m_non_finite;  ///< the first non-finite value

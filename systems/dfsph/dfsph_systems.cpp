@@ -474,7 +474,7 @@ void DfsphWallContactSystem::run(Context& ctx) {
                                          ? ctx.read(boundary(comp::velocity))
                                          : std::span<const Vec3>{};
     const NeighbourLists& lists = ctx.read(res::boundary_neighbours);
-    const Real r0 = Real(0.5) * ctx.physics().h;  // Ihmsen sec. 3.2: the rest distance
+    const Real r0 = ctx.physics().spacing;  // Ihmsen sec. 3.2: the rest distance, the boundary spacing
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 1024), [&](const auto& r) {
         for (std::size_t i = r.begin(); i < r.end(); ++i) {
             DirectForcing df{r0};

@@ -22,8 +22,10 @@ void direct_forcing(Context& ctx, bool predicted, bool moving, double friction_e
                                          ? ctx.read(boundary(comp::velocity))
                                          : std::span<const Vec3>{};
     const NeighbourLists& lists = ctx.read(res::boundary_neighbours);
-    // r0 = h / 2, the rest distance and the boundary sampling (sec. 3.2).
-    const Real r0 = Real(0.5) * ctx.physics().h;
+    // r0: the rest distance, which Ihmsen sec. 3.2 takes equal to the boundary particles' spacing
+    // ("r0 = 0.5 h" with h = 2 spacings there); the boundary is sampled at the fluid spacing 2 r
+    // (world_init.cpp), so r0 is that spacing at any fluid.support (h / 2 only at the default 2).
+    const Real r0 = ctx.physics().spacing;
     const Real friction = Real(friction_eps);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 1024), [&](const auto& r) {
         for (std::size_t i = r.begin(); i < r.end(); ++i) {

@@ -11,7 +11,11 @@
 namespace sph {
 
 struct AdaptiveParams {
-    double h = 0;            ///< support radius, m
+    /// Ihmsen et al.'s h, m: the support radius of their kernel, which sec. 3.2 ties to the particle
+    /// spacing (r0 = 0.5 h). The engine passes 2 x spacing, so that the step conditions of eq. 14-27
+    /// bound the motion per step relative to the spacing at any fluid.support (equal to the support
+    /// radius at the default 2).
+    double h = 0;
     double eta_avg = 0.01;   ///< target average compression
     double eta_max = 0.1;    ///< maximum density error (10 eta_avg by default)
     double delta_shock = 0.04;  ///< eq. 25 threshold, eta_avg < delta_shock < eta_max

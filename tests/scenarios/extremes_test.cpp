@@ -5,6 +5,8 @@
 //   in one particle, and a million steps of a tiny scene.
 #include <gtest/gtest.h>
 
+#include <sstream>
+
 #include <cmath>
 #include <fstream>
 #include <limits>
@@ -264,6 +266,16 @@ TEST(Extremes, LeavingTheDomainStopsTheRun) {
         EXPECT_EQ(e.system(), "integrate");
         EXPECT_LT(e.particle(), 27);
         EXPECT_NE(std::string(e.what()).find("left the domain at step 149"), std::string::npos) << e.what();
+        // The position in the message is the one found outside (recorded when the integrator's
+        // output was checked, not read again after later systems): its y is below -0.1 m.
+        const std::string what = e.what();
+        const std::size_t at = what.find("position (");
+        ASSERT_NE(at, std::string::npos) << what;
+        std::istringstream pos(what.substr(at + 10));
+        double px = 0, py = 0, pz = 0;
+        pos >> px >> py >> pz;
+        EXPECT_LT(py, -0.1) << what;
+        EXPECT_GT(py, -0.2) << what;  // one step past the bottom: g dt^2 n is about 1.5 mm at n = 150
         // The named particle is one of the bottom layer (y was 0.01 m).
         const auto ids = sim->world().fluid.store.get(comp::id);
         const auto x = sim->world().fluid.store.get(comp::position);

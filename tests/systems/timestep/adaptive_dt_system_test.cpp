@@ -34,6 +34,7 @@ struct AdaptiveWorld {
     PcisphController* pc = nullptr;
     AdaptiveWorld() {
         w.physics.h = Real(0.04);
+        w.physics.spacing = Real(0.02);  // Ihmsen's h = 2 r0 = 0.04 m (adaptive_controller.hpp)
         pc = &w.resources.add<PcisphController>(res::pcisph_controller.name, Lifetime::Kept);
         pc->pending_dt = 1e-3;
         pc->prev_err_max = 0.02;
