@@ -24,14 +24,16 @@ enum class Method { Wcsph, Pcisph, Dfsph };
 /// is the PCISPH mode of Ihmsen et al. 2010 (eq. 16-27) and DFSPH's CFL step (Bender & Koschier
 /// 2017 eq. 20). `binned` is per-particle stepping on
 /// power-of-two bins with a neighbour limiter and wake-up (engine/core/timeline.hpp,
-/// systems/timestep/binned_step_system.hpp); `individual` is He et al.'s Alg. 2 as published.
+/// systems/timestep/binned_step_system.hpp); `individual` is He et al.'s Alg. 2 (with
+/// `activation: paper` as published; the default `deadline` changes lines 2 and 17, docs/methods.md).
 enum class SteppingMode { Constant, Global, Individual, Adaptive, Binned };
 /// PCISPH iteration rule: `fixed` runs exactly `iterations` (Ihmsen 2010: three);
 /// `until_converged` is Solenthaler & Pajarola's loop: while max rho_err > eta or k < iterations,
 /// at most `max_iterations`.
 enum class PcisphLoop { Fixed, UntilConverged };
 /// Ihmsen 2010 sec. 3.2 (boundary density and pressure, eq. 13, plus direct forcing eq. 9-12),
-/// or `direct_forcing` alone (Becker, Teschner, Teschner 2009 eq. 7-8: no boundary density).
+/// or `direct_forcing` alone (Ihmsen eq. 9-12 without boundary density or pressure: the comparison
+/// of the paper's sec. 4.1 with Becker, Teschner & Tessendorf 2009).
 enum class BoundaryHandling { Ihmsen, DirectForcing };
 /// WCSPH pressure force: `symmetric` is He et al. eq. 4; `corrected` multiplies each pair's
 /// kernel gradient by the symmetrised correction (L_i + L_j) / 2 of Bonet & Lok 1999, which
@@ -145,7 +147,8 @@ struct SimulationParams {
 struct FluidParams {
     double rest_density = 1000.0;     ///< kg/m^3
     double particle_radius = 0.01;    ///< m, before `scale`; spacing is 2 r, support h = support * 2 r.
-    /// Kernel support radius h in particle spacings (default 2: h = 4 r, as He et al.). A larger
+    /// Kernel support radius h in particle spacings (default 2: h = 4 r, Ihmsen et al.'s r0 = h / 2; He
+/// et al. state no ratio). A larger
     /// support lowers the kernel-sum error at a cost of about support^3 neighbours per particle.
     double support = 2.0;
     /// Monaghan artificial viscosity alpha (dimensionless). Unset: artificial_viscosity(scene),

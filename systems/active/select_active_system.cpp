@@ -1,4 +1,5 @@
-// He et al. Alg. 2 line 2: select active (t_last + Delta t_i <= t_sim, in exact ticks).
+// He et al. Alg. 2 line 2: select active (the paper: t_last + Delta t_i < t_sim; `paper` counts the tie
+// as active, `deadline`, the default, evaluates before the deadline is passed; in exact ticks).
 #include "systems/active/select_active_system.hpp"
 
 #include <tbb/parallel_for.h>

@@ -147,7 +147,7 @@ void DensitySystem::run_continuity(Context& ctx) {
     auto start = [&](Index i) { rho[i] = summation(i); };
     // A row with no fluid neighbour (a droplet, alone or against a wall) takes the summation
     // density, as a started row does: max(m W(0) + rho0 sum_b V_b W_ib, rho0) (Akinci et al.
-    // 2012 eq. 4 with the boundary). Its continuity density has nothing to relax it (no pair, no
+    // 2012 eq. 6, with the volumes V_b of their eq. 4). Its continuity density has nothing to relax it (no pair, no
     // diffusion), and the boundary term integrated over its own long steps does not return to
     // where it started after a wall contact: evaluated at each step's end it overshoots on the way
     // in and undershoots on the way out, so the droplet leaves every contact denser than it came

@@ -1,6 +1,6 @@
 // He et al. eq. 4, a_i = -sum_j m_j (p_i/rho_i^2 + p_j/rho_j^2 + Pi_ij) grad W_ij + g, with
-// Monaghan 1992's Pi_ij (forces_kernels.hpp), the Akinci et al. 2012 eq. 10 boundary term with
-// pressure mirroring, -sum_b psi_b (2 p_i/rho_i^2 + Pi_ib) grad W_ib (psi_b = rho0 V_b; with
+// Monaghan 1992's Pi_ij (forces_kernels.hpp), Akinci et al. 2012's boundary volumes in the pair with
+// the wall's pressure mirroring the fluid's (twice Akinci eq. 10's single term), -sum_b psi_b (2 p_i/rho_i^2 + Pi_ib) grad W_ib (psi_b = rho0 V_b; with
 // extrapolated walls p_i/rho_i^2 + p_b/rho_b^2, Adami et al. 2012 eq. 27,
 // Pi_ib with rho_b = rho0 and v_ib = v_i - v_b), and He eq. 5's drho_i/dt =
 // sum_j m_j v_ij . grad W_ij + sum_b psi_b v_ib . grad W_ib: the formulas of forces_system.cpp,

@@ -1,6 +1,7 @@
 // He et al. eq. 4: a_i = -sum_j m_j (p_i/rho_i^2 + p_j/rho_j^2) grad W_ij + g,
 // plus Monaghan 1992 artificial viscosity -sum_j m_j Pi_ij grad W_ij (forces_kernels.hpp).
-// Boundary (Akinci et al. 2012 eq. 10 with pressure mirroring p_b = p_i, rho_b = rho_i):
+// Boundary (Akinci et al. 2012's volumes in He eq. 4's pair, the wall's side mirroring p_b = p_i,
+// rho_b = rho_i: twice Akinci eq. 10's single p_i / rho_i^2 term; docs/methods.md, "Wall pressure"):
 // a_i -= sum_b psi_b (2 p_i / rho_i^2) grad W_ib, psi_b = rho0 V_b; with `fluid.wall_pressure:
 // extrapolated` (p_b, rho_b of WallPressureSystem, Adami et al. 2012 eq. 27)
 // a_i -= sum_b psi_b (p_i / rho_i^2 + p_b / rho_b^2) grad W_ib. Viscosity against the wall

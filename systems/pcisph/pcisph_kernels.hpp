@@ -38,7 +38,9 @@ inline double pcisph_delta(double prototype_sum, double mass, double dt, double 
 }
 
 /// @brief Pressure update of eq. 3, p += delta rho_err, kept >= 0: a particle short of
-/// neighbours (free surface) would otherwise pull its neighbours in (tensile instability).
+/// neighbours (free surface) would otherwise pull its neighbours in (tensile instability). Ihmsen
+/// sec. 3.4 corrects the surface density with [BK02]'s constant correction instead, which the
+/// engine does not implement (docs/methods.md, PCISPH).
 inline Real pcisph_pressure_update(Real p, Real delta, Real rho_pred, Real rho0) {
     const Real q = p + delta * (rho_pred - rho0);
     return q > Real(0) ? q : Real(0);

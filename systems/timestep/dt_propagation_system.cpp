@@ -1,5 +1,6 @@
 // He et al. Alg. 2 line 16: Delta t_i = min_j Delta t_j^raw (j over the neighbours of i and i
-// itself), for the active particles and their halo (the remark after line 22).
+// itself), for the active particles and their halo (He sec. 2.3: lines 9 and 16 are needed only
+// for neighbours of active particles).
 #include "systems/timestep/dt_propagation_system.hpp"
 
 #include <tbb/blocked_range.h>

@@ -12,7 +12,7 @@
 namespace sph {
 
 /// @brief He Alg. 2 line 16, run only where a Delta t^raw changed: for every active particle
-/// and every inactive neighbour of one (the halo, He's remark after line 22, which it also
+/// and every inactive neighbour of one (the halo, He sec. 2.3's observation before Alg. 2, which it also
 /// collects, ascending, into fluid.halo_set). Each gets the minimum over its own list (fresh
 /// for the active, the last one for the halo) and itself; a halo particle also gets the
 /// Delta t^raw of every active particle whose fresh list holds it, so a sleeping particle that
