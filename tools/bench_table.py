@@ -1,6 +1,8 @@
 #!/usr/bin/env python3
-"""Turns Google Benchmark JSON (--benchmark_out) into the README's Markdown table: medians of
-repetitions where present, with the machine context and date the run recorded.
+"""Turns Google Benchmark JSON (--benchmark_out) into the Markdown tables of
+docs/results/benchmarks.md: medians of repetitions where present, with the machine context and
+date the run recorded; then the thread-scaling pairs and, for BM_Individual_* and BM_Binned_*,
+one row per system with a column per active share.
 
 usage: tools/bench_table.py out/bench.json
 """
@@ -24,8 +26,10 @@ aggregated = {b["run_name"] for b in data["benchmarks"] if b.get("run_type") == 
 rows = [b for b in data["benchmarks"]
         if (b.get("aggregate_name") == "median") or (b.get("run_type") != "aggregate" and b["run_name"] not in aggregated)]
 rows.sort(key=lambda b: b["run_name"])
+reps = rows[0].get("repetitions", 1) if rows else 1
 print(f"`sph-bench` on {ctx.get('num_cpus')} × {ctx.get('mhz_per_cpu')} MHz, {ctx.get('date')}; engine built Release "
-      f"(Debian's libbenchmark reports itself as {ctx.get('library_build_type')}); medians of {rows[0].get('repetitions', 1) if rows else 0} repetitions.\n")
+      f"(Debian's libbenchmark reports itself as {ctx.get('library_build_type')}); "
+      + (f"medians of {reps} repetitions.\n" if reps > 1 else "one run each.\n"))
 print("| benchmark | particles | time per iteration | items/s | neighbours/particle | bytes/particle |")
 print("|---|---|---|---|---|---|")
 for b in rows:
@@ -33,7 +37,8 @@ for b in rows:
     n = b.get("particles", b.get("fluid_particles", 0))
     unit = b.get("time_unit", "ns")
     bpp = b.get("bytes_per_particle")
-    print(f"| `{name}` | {n:,.0f} | {b['real_time']:.3g} {unit} | {b['items_per_second'] / 1e6:.2f} M | "
+    ips = b.get("items_per_second")  # absent where a benchmark counts no items (BM_Binned_body)
+    print(f"| `{name}` | {n:,.0f} | {b['real_time']:.3g} {unit} | {f'{ips / 1e6:.2f} M' if ips else ''} | "
           f"{b.get('neighbours_per_particle', 0):.1f} | {'%.0f' % bpp if bpp else ''} |")
 
 # Thread scaling, from the same run: the ratio of the 1-thread to the 2-thread median.
@@ -55,7 +60,9 @@ for family, label in (("Individual", "individual"), ("Binned", "binned")):
     shares = {}
     for name, b in by_name.items():
         m = re.fullmatch(rf"BM_{family}_(\w+)/(\d+)/(\d+)", name)
-        if m:
+        # The last argument is the active share in per mille (1000, 500, 100, 10); other
+        # families' last argument means something else (BM_Binned_body/N/{0,1}: a moving body).
+        if m and int(m.group(3)) in (1000, 500, 100, 10):
             shares.setdefault((m.group(1), int(m.group(2))), {})[int(m.group(3))] = b
     if not shares:
         continue

@@ -66,7 +66,13 @@ def compare_run(a, b):
 
 
 def main():
+    if len(sys.argv) != 3 or sys.argv[1] in ("-h", "--help"):
+        print(__doc__.strip(), file=sys.stdout if len(sys.argv) == 2 else sys.stderr)
+        sys.exit(0 if len(sys.argv) == 2 else 2)
     before, after = pathlib.Path(sys.argv[1]), pathlib.Path(sys.argv[2])
+    for d in (before, after):
+        if not d.is_dir():
+            sys.exit(f"compare_runs.py: {d}: not a folder of runs")
     runs = sorted({p.name for p in before.iterdir() if p.is_dir()} | {p.name for p in after.iterdir() if p.is_dir()})
     bad = 0
     frames = 0

@@ -7,15 +7,17 @@ columns engine, configuration, wall_s, max_avg_density_error_percent (docs/resul
 import csv
 import sys
 
-try:
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-except ImportError:
-    sys.exit("pareto_plot.py: needs matplotlib (Debian: apt-get install python3-matplotlib; run with /usr/bin/python3)")
+if len(sys.argv) != 3 or sys.argv[1] in ("-h", "--help"):
+    print(__doc__.strip(), file=sys.stdout if len(sys.argv) == 2 else sys.stderr)
+    sys.exit(0 if len(sys.argv) == 2 else 2)
 
-if len(sys.argv) != 3:
-    sys.exit(__doc__)
+from sph_python import need  # noqa: E402 (tools/ is the script's folder)
+
+need("matplotlib")
+import matplotlib  # noqa: E402
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
 rows = list(csv.DictReader(open(sys.argv[1])))
 fig, ax = plt.subplots(figsize=(7, 4.5))
 for engine, marker in (("ours", "o"), ("SPlisHSPlasH (scaled)", "s")):
