@@ -173,6 +173,8 @@ class Study:
             self.scene_path.write_text(json.dumps(self.scene_json, indent=2))
             self.fluid_probe = "study_fluid"
             self.probes = self.scene_json["probes"]
+        for i, probe in enumerate(self.probes):  # the engine's default name, <type>_<index>
+            probe.setdefault("name", f"{probe.get('type')}_{i}")
 
     def sph_run(self, extra, out_dir, label, index, total):
         cmd = [self.a.sph_run, str(self.scene_path), "--threads", str(self.a.threads), "--out", str(out_dir)]
@@ -320,34 +322,46 @@ def experiment_series(run_dir, probe, scene_dir):
     return T, Z, x[keys[0]], x[keys[1]]
 
 
-def shifted_error(T, Z, te, ze, t_range, max_shift, points_shift=None):
-    """RMS relative error of Z(T) against (te, ze), minimised over one time shift |dT| <= max_shift
-    in steps of 0.005: returns (error, shift), or (nan, 0) if no shift fits. The measured points
-    are those in t_range that the run reaches at a shift of points_shift (default max_shift), so
-    that a wider search compares the same points; shifts that would need the run beyond its
-    first or last sample are skipped, never extrapolated."""
+SHIFT_STEP = 0.005  # the time-shift grid, in the experiment's (dimensionless) time
+
+
+def shifted_error(T, Z, te, ze, t_range, max_shift, points_shift=None, report_bound=False):
+    """RMS relative error of Z(T) against (te, ze), minimised over one time shift on the grid
+    k * SHIFT_STEP with |dT| <= max_shift: returns (error, shift), or (nan, 0) if no shift fits.
+    The measured points are those in t_range that the run reaches at a shift of points_shift
+    (default max_shift), so that a wider search compares the same points; shifts that would need
+    the run beyond its first or last sample are skipped, never extrapolated. "Relative" divides by
+    the measured value at each point; points whose |value| is below 1 % of the largest |value| in
+    the range are left out (near a zero the ratio measures nothing). With report_bound, also
+    returns whether the best shift is the first or last one tried (the search's bound: ±max_shift,
+    or where the run ends), so that a better fit may lie beyond it."""
     lo, hi = t_range
     ps = max_shift if points_shift is None else points_shift
     sel = (te >= lo) & (te <= hi) & (te - ps <= T[-1])
+    if sel.any():
+        sel &= np.abs(ze) >= 0.01 * np.abs(ze[sel]).max()
     best = (float("nan"), 0.0)
-    if not sel.any():
+    tried = []
+    if sel.any():
+        n = int(np.floor(max_shift / SHIFT_STEP + 1e-9))  # never beyond max_shift
+        for k in range(-n, n + 1):
+            shift = SHIFT_STEP * k
+            t = te[sel] - shift
+            if t.max() > T[-1] + 1e-12 or t.min() < T[0] - 1e-12:
+                continue
+            tried.append(shift)
+            err = float(np.sqrt(np.mean(((np.interp(t, T, Z) - ze[sel]) / ze[sel]) ** 2)))
+            if not err >= best[0]:  # also replaces the initial nan
+                best = (err, shift)
+    if not report_bound:
         return best
-    n = int(round(max_shift / 0.005))
-    for k in range(-n, n + 1):
-        shift = 0.005 * k
-        t = te[sel] - shift
-        if t.max() > T[-1] + 1e-12 or t.min() < T[0] - 1e-12:
-            continue
-        err = float(np.sqrt(np.mean(((np.interp(t, T, Z) - ze[sel]) / ze[sel]) ** 2)))
-        if not err >= best[0]:  # also replaces the initial nan
-            best = (err, shift)
-    return best
+    return best[0], best[1], len(tried) > 1 and best[1] in (tried[0], tried[-1])
 
 
 def experiment_error(run_dir, probe, scene_dir):
     e = probe["experiment"]
     T, Z, te, ze = experiment_series(run_dir, probe, scene_dir)
-    return shifted_error(T, Z, te, ze, e.get("t_range", [-1e300, 1e300]), e.get("max_shift", 0.0))
+    return shifted_error(T, Z, te, ze, e.get("t_range", [-1e300, 1e300]), e.get("max_shift", 0.0), report_bound=True)
 
 
 def wave_figures(run_dir, fluid_probe, summary, scene_json):
@@ -498,11 +512,14 @@ def main():
                 rms, relative = deviation(mine[name], series)
                 row[f"dev {name} ({series[2]})"] = rms
                 rel.append(relative)
+        # Over the series whose reference varies (a flat reference has no range to divide by).
+        rel = [x for x in rel if np.isfinite(x)]
         row["deviation (mean rel.)"] = float(np.mean(rel)) if rel else float("nan")
         for p in exp_probes:
-            err, shift = experiment_error(r["_dir"], p, scene_dir)
+            err, shift, at_bound = experiment_error(r["_dir"], p, scene_dir)
             row[f"exp err {p['name']} %"] = 100 * err
             row[f"exp shift {p['name']}"] = shift
+            row[f"exp shift at bound {p['name']}"] = at_bound
         # What per-particle stepping could at most gain over this run at its lambda_c
         # (tools/stepping_bound.py): WCSPH with the acoustic condition only.
         try:
@@ -558,12 +575,17 @@ def main():
                  f"{row['avg_density_error_pct']:.2f} / {row['max_density_error_pct']:.1f}",
                  f"{row['net_catches']:,}" + (f" ({row['droplet_contacts']:,})" if row["droplet_contacts"] is not None else "")]
         cells += [fmt(row.get(k)) for k in dev_cols] + [fmt(row["deviation (mean rel.)"])]
-        cells += [f"{row[k]:.1f} ({row[k.replace('exp err ', 'exp shift ').replace(' %', '')]:+.2f})" for k in exp_cols]
+        cells += [f"{row[k]:.1f} ({row[k.replace('exp err ', 'exp shift ').replace(' %', '')]:+.2f}"
+                  + ("*" if row.get(k.replace("exp err ", "exp shift at bound ").replace(" %", "")) else "") + ")"
+                  for k in exp_cols]
         if wave_cols:
             cells += [f"{row['wave period s']:.4f} ({row['wave period err %']:+.2f})" if "wave period s" in row else "",
                       f"{row['wave decay 1/s']:.4f} ({row['wave decay / theory']:.2f})" if "wave period s" in row else ""]
         lines.append("| " + " | ".join(cells) + " |")
     notes = [f"* {c['label']}: {c['note']}" for c in configs if c.get("note")]
+    if any(v is True for row in rows for k, v in row.items() if k.startswith("exp shift at bound ")):
+        notes.append("* ΔT marked * is the first or last shift the search could try (±max_shift, or where the run "
+                     "ends): a better fit may lie beyond it, with a wider `max_shift` or a longer run.")
     for row in rows:
         if row["status"] == "ok" and row["mode"] in ("global", "constant") and \
                 "evaluations / sound-crossing bound" in row:
