@@ -249,11 +249,13 @@ TEST(NeighbourSearch, SubsetRebuildAndCapacityGrowth) {
         grid.build(pts);
         NeighbourLists lists;
         build_neighbour_lists(grid, pts, pts, h, true, QuerySubset{}, lists, simd);
-        // Move a few particles into one dense clump, then rebuild only them.
+        // Move 600 particles into one dense clump, then rebuild only them: more than two of the
+        // slab build's 256-row tasks overflow the capacity at once (the thread sanitizer's stage
+        // sees their shared overflow flag).
         std::vector<Index> moved;
-        for (Index i = 0; i < 120; ++i) {
-            pts[i * 10] = Vec3(0.2f + 0.0001f * i, 0.2f, 0.2f);
-            moved.push_back(i * 10);
+        for (Index i = 0; i < 600; ++i) {
+            pts[i * 2] = Vec3(0.2f + 0.0001f * Real(i % 120), 0.2f + 0.0001f * Real(i / 120), 0.2f);
+            moved.push_back(i * 2);
         }
         grid.build(pts);
         const Index cap_before = lists.capacity;

@@ -49,7 +49,7 @@ std::vector<int> relaxed_bins(const World& w) {
     return bin;
 }
 
-enum class Raw { Chain, Edge };
+enum class Raw { Chain, Edge, Stripes };
 
 struct Outcome {
     int rings = 0;              ///< (largest bin - the fast row's) / 2
@@ -90,7 +90,8 @@ Outcome check_fixed_point(Raw raw, double headroom, bool by_cells) {
     const auto x = w.fluid.store.get(comp::position);
     std::size_t fast = 0;
     for (std::size_t i = 0; i < n; ++i) {
-        dt_raw[i] = raw == Raw::Edge && x[i].x() < 0.6f ? st.dt_max / 16 : st.dt_max;
+        const bool slow_stripe = int(std::floor(x[i].x() / 0.03f)) % 2 == 0;
+        dt_raw[i] = (raw == Raw::Edge && x[i].x() < 0.6f) || (raw == Raw::Stripes && slow_stripe) ? st.dt_max / 16 : st.dt_max;
         if (x[i].x() < x[fast].x()) fast = i;
     }
     if (raw == Raw::Chain) dt_raw[fast] = 0.7 * std::ldexp(st.dt_max, -12);
@@ -127,6 +128,22 @@ TEST(BinnedStepSystem, EveryRowDueReachesTheLimitersFixedPointAlongChains) {
 // same fixed point either way; found by cell, the limiter reads the lists of the rows within a
 // cell of the plane (measured: 200 of 6,000, one layer of cells) instead of those of the 3,000 fast rows,
 // each of which can bound a neighbour.
+// Stripes 3 cm wide alternately needing dt_max / 16 and dt_max along x (39 edges): the rows the
+// limiter pulls at, found by cell, are more than one 2,048-row task (every slow row lies by an edge; so that the thread
+// sanitizer's stage sees the pull's compare-and-swap lowering run concurrently), and both paths
+// still reach the serial relaxation's fixed point.
+TEST(BinnedStepSystem, EveryRowDueAcrossManyEdgesPullsInSeveralTasks) {
+    const Outcome cells = check_fixed_point(Raw::Stripes, 0, true);
+    const Outcome pushed = check_fixed_point(Raw::Stripes, 0, false);
+    std::printf("rows visited: %llu by cell, %llu pushed from every row\n",
+                static_cast<unsigned long long>(cells.visited), static_cast<unsigned long long>(pushed.visited));
+    // A 3 cm stripe is 1.5 spacings wide: every slow row neighbours a fast one, so each is pulled
+    // down to the fast bin + 2 (one ring) and none rises further.
+    EXPECT_EQ(cells.rings, 1);
+    EXPECT_EQ(pushed.rings, 1);
+    EXPECT_GT(cells.visited, 2048u);  // measured 2,983: two tasks
+}
+
 TEST(BinnedStepSystem, EveryRowDueVisitsOnlyTheRowsNearABinEdgeByCell) {
     const Outcome cells = check_fixed_point(Raw::Edge, 0, true);
     const Outcome pushed = check_fixed_point(Raw::Edge, 0, false);
