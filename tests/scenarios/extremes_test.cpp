@@ -494,3 +494,24 @@ TEST(Extremes, EveryModeStepsALargerFlowInParallel) {
         EXPECT_EQ(w.clock.step, 3);
     }
 }
+
+// A scene built in code skips the loader: PCISPH and DFSPH at another kernel support (which blow
+// up on a resting tank, docs/methods.md "Known limitations") are refused by make_recipe as the
+// loader refuses them in a file (InputError naming fluid.support); WCSPH takes it.
+TEST(Extremes, CodeBuiltPcisphAndDfsphRefuseAnotherSupport) {
+    Scene s = test::tank_scene(Vec3d(0.1, 0.1, 0.1), Vec3d(0.2, 0.2, 0.2));
+    s.fluid.support = 3.0;
+    for (const Method m : {Method::Pcisph, Method::Dfsph}) {
+        s.simulation.method = m;
+        s.simulation.stepping.mode = SteppingMode::Adaptive;
+        try {
+            make_recipe(s);
+            ADD_FAILURE() << to_string(m) << " at support 3 was accepted";
+        } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find("fluid.support"), std::string::npos) << e.what();
+        }
+    }
+    s.simulation.method = Method::Wcsph;
+    s.simulation.stepping.mode = SteppingMode::Global;
+    EXPECT_NO_THROW(make_recipe(s));
+}
