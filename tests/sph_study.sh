@@ -113,3 +113,21 @@ rc=0; "$tools/sph-study" "$out/bad_exp.json" --no-default-modes --config global 
 grep -q "bad_exp.json: probe 'front': experiment file .*no_such_experiment.csv: No such file or directory" "$out/xlog" \
     && [ "$rc" -eq 2 ] && [ ! -e "$out/x/reference" ] || { echo "missing experiment file: exit $rc"; cat "$out/xlog"; exit 1; }
 echo "sph-study missing experiment file: ok"
+
+# Bad arguments stop the study before any run (exit 2, one line naming the argument): a mode the
+# scene does not load with, an unclosed quote in --config, a reference step <= 0, a reference
+# folder without summary.json, an output folder that cannot be made, a scene that is not JSON.
+echo '{"name": "x",' > "$out/truncated.json"
+check_refused() {  # expected message, then the arguments
+    local want=$1; shift
+    rc=0; "$tools/sph-study" "$@" > "$out/rlog" 2>&1 || rc=$?
+    [ "$rc" -eq 2 ] && grep -q "$want" "$out/rlog" && ! grep -q Traceback "$out/rlog" && [ ! -e "$out/r/01_global" ] \
+        || { echo "refusal of $*: exit $rc"; cat "$out/rlog"; exit 1; }
+}
+check_refused "no mode wcsph/bogus for this scene" scenes/martin_moyce.json --no-default-modes --config bogus --out "$out/r"
+check_refused "No closing quotation" scenes/martin_moyce.json --config "global --name 'x" --out "$out/r"
+check_refused "reference-dt 0.0: expected a step > 0 s" scenes/martin_moyce.json --reference-dt 0 --out "$out/r"
+check_refused "reference /nonexistent: no readable summary.json" scenes/martin_moyce.json --reference /nonexistent --out "$out/r"
+check_refused "out /proc/x: cannot create the output folder" scenes/martin_moyce.json --out /proc/x
+check_refused "truncated.json: not a readable JSON scene" "$out/truncated.json" --out "$out/r"
+echo "sph-study bad arguments: ok"

@@ -86,7 +86,10 @@ def full_key(key):
 
 
 def parse_config(spec):
-    words = shlex.split(spec)
+    try:
+        words = shlex.split(spec)
+    except ValueError as e:  # an unclosed quote
+        fail(f"--config {spec!r}: {e}")
     if not words:
         fail(f"--config {spec!r}: empty (expected 'MODE [--set KEY=VALUE ...] [--name LABEL]')")
     mode, rest = words[0], words[1:]
@@ -154,7 +157,12 @@ class Study:
         self.scene = pathlib.Path(args.scene)
         if not self.scene.is_file():
             fail(f"{self.scene}: no such scene file")
-        self.scene_json = json.loads(self.scene.read_text())
+        try:
+            self.scene_json = json.loads(self.scene.read_text())
+        except (OSError, ValueError) as e:
+            fail(f"{self.scene}: not a readable JSON scene ({e})")
+        if not isinstance(self.scene_json, dict):
+            fail(f"{self.scene}: expected a JSON object (a scene), found {type(self.scene_json).__name__}")
         self.out = pathlib.Path(args.out or f"out/study/{self.scene_json.get('name', self.scene.stem)}")
         self.common = [full_key(s) for s in args.set]
         if args.end is not None:
@@ -454,12 +462,35 @@ def main():
     if not pathlib.Path(args.sph_run).exists():
         fail(f"{args.sph_run}: not found (build first: cmake --build build)")
 
+    if args.reference_dt is not None and not args.reference_dt > 0:
+        fail(f"--reference-dt {args.reference_dt}: expected a step > 0 s")
+    if args.threads < 1:
+        fail(f"--threads {args.threads}: expected at least 1")
+    if args.reference:  # checked before any run, not after all of them
+        ref_summary = pathlib.Path(args.reference) / "summary.json"
+        try:
+            json.loads(ref_summary.read_text())
+        except (OSError, ValueError) as e:
+            fail(f"--reference {args.reference}: no readable summary.json there ({getattr(e, 'strerror', None) or e})")
     study = Study(args)
+    try:
+        study.out.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        fail(f"--out {study.out}: cannot create the output folder ({e.strerror or e})")
+    known = {tuple(m) for m in study.list_modes()}  # every "method mode" pair the scene loads with
+    for spec in args.config:
+        c = parse_config(spec)
+        method = c["method"] or study.scene_method()
+        if (method, c["mode"]) not in known:
+            fail(f"--config {spec!r}: no mode {method}/{c['mode']} for this scene (it loads with: "
+                 + ", ".join(f"{m}/{o}" for m, o in sorted(known)) + ")")
     # The experiments' files are read before any run, so that a missing or unreadable one stops
     # the study at once instead of after every configuration has run.
     for probe in study.probes:
         if "experiment" not in probe:
             continue
+        if not isinstance(probe["experiment"], dict) or "file" not in probe["experiment"]:
+            fail(f"{study.scene}: probe '{probe.get('name')}': experiment without a \"file\"")
         where = study.scene.resolve().parent / probe["experiment"]["file"]
         try:
             data = read_csv(where)
