@@ -11,6 +11,9 @@ import pathlib
 import subprocess
 import sys
 import time
+from sph_python import errors_as_exit_2, positive_list  # noqa: E402 (tools/ is the script's folder)
+
+errors_as_exit_2()
 
 ap = argparse.ArgumentParser()
 ap.add_argument("scenes", nargs="*", default=["scenes/dam_break.json"])
@@ -18,11 +21,12 @@ ap.add_argument("--sph-run", default="build/tools/sph-run")
 ap.add_argument("--out", default="out/acoustic_study")
 ap.add_argument("--viscosities", default="0.02,0.1")
 args = ap.parse_args()
+VISCOSITIES = positive_list(args.viscosities, "--viscosities", allow_zero=True)
 
 rows = []
 for scene in args.scenes:
   stem = pathlib.Path(scene).stem
-  for alpha in [float(a) for a in args.viscosities.split(",")]:
+  for alpha in VISCOSITIES:
     for acoustic in (True, False):
         name = f"{stem}_alpha{alpha}_{'acoustic' if acoustic else 'eq6-8_only'}"
         out = pathlib.Path(args.out) / name

@@ -9,6 +9,9 @@ usage: tools/bench_table.py out/bench.json
 import json
 import re
 import sys
+from sph_python import errors_as_exit_2  # noqa: E402 (tools/ is the script's folder)
+
+errors_as_exit_2()
 
 if len(sys.argv) != 2 or sys.argv[1] in ("-h", "--help"):
     print(__doc__.strip(), file=sys.stderr if len(sys.argv) != 2 else sys.stdout)
@@ -17,7 +20,11 @@ try:
     with open(sys.argv[1]) as f:
         data = json.load(f)
 except (OSError, json.JSONDecodeError) as e:
-    sys.exit(f"bench_table: {sys.argv[1]}: {e}")
+    print(f"bench_table: {sys.argv[1]}: {e}", file=sys.stderr)
+    sys.exit(2)
+if not isinstance(data, dict) or "benchmarks" not in data or "context" not in data:
+    print(f"bench_table: {sys.argv[1]}: not Google Benchmark JSON (no \"context\" and \"benchmarks\")", file=sys.stderr)
+    sys.exit(2)
 ctx = data["context"]
 # With --benchmark_repetitions a run has iteration rows and aggregate rows: keep the median
 # aggregate only; a run without repetitions has just its iteration row. Sorted by name, since

@@ -21,6 +21,9 @@ import statistics
 import subprocess
 import sys
 import time
+from sph_python import errors_as_exit_2, positive_list, require  # noqa: E402 (tools/ is the script's folder)
+
+errors_as_exit_2()
 
 ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
 ap.add_argument("--scene", default="scenes/corner_breaking_dam.json")
@@ -32,6 +35,8 @@ ap.add_argument("--threads", type=int, default=2)
 ap.add_argument("--sph-run", default="build/tools/sph-run")
 ap.add_argument("--out", default="out/boundary_sweep")
 args = ap.parse_args()
+DTS = positive_list(args.dts, "--dts")
+require(args.eta > 0, f"--eta {args.eta}: expected a fraction > 0")
 out_root = pathlib.Path(args.out)
 out_root.mkdir(parents=True, exist_ok=True)
 rows = []
@@ -40,7 +45,7 @@ best_inner = {}  # handling -> largest dt passing on the interior average (no wa
 scene = json.loads(pathlib.Path(args.scene).read_text())
 for handling in ("ihmsen", "direct_forcing"):
     failed_whole = failed_inner = False
-    for dt in [float(x) for x in args.dts.split(",")]:
+    for dt in DTS:
         out = out_root / f"{handling}_{dt:g}"
         out.mkdir(parents=True, exist_ok=True)
         # The scene with a fluid probe sampled every step (engine/run/probes.hpp: whole-fluid and

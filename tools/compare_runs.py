@@ -12,6 +12,9 @@ run differs (or exists on one side only).
 import json
 import pathlib
 import sys
+from sph_python import errors_as_exit_2  # noqa: E402 (tools/ is the script's folder)
+
+errors_as_exit_2()
 
 TIMING_KEYS = {"wall_time_s", "cpu_time_s", "fluid_particle_steps_per_s", "peak_memory_bytes",
                "particle_data_bytes", "bytes_per_fluid_particle", "peak_memory_per_fluid_particle",
@@ -67,12 +70,14 @@ def compare_run(a, b):
 
 def main():
     if len(sys.argv) != 3 or sys.argv[1] in ("-h", "--help"):
-        print(__doc__.strip(), file=sys.stdout if len(sys.argv) == 2 else sys.stderr)
-        sys.exit(0 if len(sys.argv) == 2 else 2)
+        wanted = len(sys.argv) == 2 and sys.argv[1] in ("-h", "--help")
+        print(__doc__.strip(), file=sys.stdout if wanted else sys.stderr)
+        sys.exit(0 if wanted else 2)
     before, after = pathlib.Path(sys.argv[1]), pathlib.Path(sys.argv[2])
     for d in (before, after):
         if not d.is_dir():
-            sys.exit(f"compare_runs.py: {d}: not a folder of runs")
+            print(f"compare_runs.py: {d}: not a folder of runs", file=sys.stderr)
+            sys.exit(2)
     runs = sorted({p.name for p in before.iterdir() if p.is_dir()} | {p.name for p in after.iterdir() if p.is_dir()})
     bad = 0
     frames = 0

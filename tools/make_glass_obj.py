@@ -8,12 +8,17 @@ usage: tools/make_glass_obj.py [OUT.obj] [--segments 48] [--rings 12]
 """
 import argparse
 import math
+from sph_python import errors_as_exit_2, require  # noqa: E402 (tools/ is the script's folder)
+
+errors_as_exit_2()
 
 ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
 ap.add_argument("out", nargs="?", default="scenes/meshes/glass.obj")
 ap.add_argument("--segments", type=int, default=48)
 ap.add_argument("--rings", type=int, default=12)
 args = ap.parse_args()
+require(args.segments >= 3, f"--segments {args.segments}: expected at least 3 (a closed ring)")
+require(args.rings >= 1, f"--rings {args.rings}: expected at least 1")
 
 r_bottom, r_top, height = 0.08, 0.11, 0.22
 n, m = args.segments, args.rings

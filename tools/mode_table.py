@@ -26,6 +26,9 @@ import subprocess
 import statistics
 import sys
 import time
+from sph_python import errors_as_exit_2, positive_list, require  # noqa: E402 (tools/ is the script's folder)
+
+errors_as_exit_2()
 
 ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
 ap.add_argument("scene")
@@ -43,6 +46,8 @@ ap.add_argument("--extra", action="append", default=[],
                 help="an extra configuration, e.g. 'individual(global λ):simulation.stepping.mode=individual,"
                      "simulation.stepping.lambda_v=0.1'")
 args = ap.parse_args()
+SCALES = positive_list(args.scales, "--scales")
+require(args.repeat >= 1, f"--repeat {args.repeat}: expected at least 1")
 
 if not pathlib.Path(args.sph_run).exists():
     sys.exit(f"{args.sph_run}: not found (build first: cmake --build build)")
@@ -74,7 +79,7 @@ def fronts(s):
 
 rows = []
 system_tables = []  # per scale: (configurations, {system: {configuration: ms per step}})
-for scale in [float(s) for s in args.scales.split(",")]:
+for scale in SCALES:
     # The first global run also fixes the constant step (its smallest step).
     first = run("global", scale, ["simulation.stepping.mode=global"], 0)
     configs = [("global", ["simulation.stepping.mode=global"])]

@@ -8,10 +8,12 @@ import csv
 import sys
 
 if len(sys.argv) != 3 or sys.argv[1] in ("-h", "--help"):
-    print(__doc__.strip(), file=sys.stdout if len(sys.argv) == 2 else sys.stderr)
-    sys.exit(0 if len(sys.argv) == 2 else 2)
+    wanted = len(sys.argv) == 2 and sys.argv[1] in ("-h", "--help")
+    print(__doc__.strip(), file=sys.stdout if wanted else sys.stderr)
+    sys.exit(0 if wanted else 2)
 
-from sph_python import need  # noqa: E402 (tools/ is the script's folder)
+from sph_python import errors_as_exit_2, need  # noqa: E402 (tools/ is the script's folder)
+errors_as_exit_2()
 
 need("matplotlib")
 import matplotlib  # noqa: E402

@@ -20,6 +20,9 @@ import pathlib
 import subprocess
 import sys
 import time
+from sph_python import errors_as_exit_2  # noqa: E402 (tools/ is the script's folder)
+
+errors_as_exit_2()
 
 ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
 ap.add_argument("scenes", nargs="+")

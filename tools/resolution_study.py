@@ -38,7 +38,8 @@ import subprocess
 import sys
 import time
 
-from sph_python import need  # noqa: E402 (tools/ is the script's folder)
+from sph_python import errors_as_exit_2, need  # noqa: E402 (tools/ is the script's folder)
+errors_as_exit_2()
 
 need("numpy")
 import numpy as np  # noqa: E402
