@@ -36,6 +36,12 @@ for scene in args.scenes:
         t0 = time.time()
         proc = subprocess.run(cmd, capture_output=True, text=True)
         wall = time.time() - t0
+        if proc.returncode not in (0, 3):
+            # Not a run that went unstable (exit 3 keeps its outputs up to the failure) but bad input
+            # or a broken run: its folder may hold an earlier run's outputs, so none is read.
+            print(f"acoustic_study.py: error: {' '.join(cmd)} exited {proc.returncode}: "
+                  f"{(proc.stderr.strip().splitlines() or [''])[-1]}", file=sys.stderr)
+            sys.exit(2 if proc.returncode == 2 else 1)
         summary = json.loads((out / "summary.json").read_text()) if (out / "summary.json").exists() else {}
         stats = (out / "stats.csv").read_text().splitlines() if (out / "stats.csv").exists() else []
         header = stats[0].split(",") if stats else []

@@ -78,7 +78,14 @@ def main():
         if not d.is_dir():
             print(f"compare_runs.py: {d}: not a folder of runs", file=sys.stderr)
             sys.exit(2)
+        if (d / "summary.json").exists() or (d / "stats.csv").exists():
+            print(f"compare_runs.py: {d}: a run's own folder; give the folders that hold the runs "
+                  f"(one sub-folder per run, as tools/check_identical.sh writes them)", file=sys.stderr)
+            sys.exit(2)
     runs = sorted({p.name for p in before.iterdir() if p.is_dir()} | {p.name for p in after.iterdir() if p.is_dir()})
+    if not runs:
+        print(f"compare_runs.py: {before} and {after} hold no run folders", file=sys.stderr)
+        sys.exit(2)
     bad = 0
     frames = 0
     for name in runs:

@@ -73,7 +73,10 @@ def read_vtu(path):
     piece = root.find("UnstructuredGrid/Piece")
     if piece is None:
         raise VtuError(f"{path}: no <UnstructuredGrid><Piece>")
-    n = int(piece.get("NumberOfPoints", "0"))
+    try:
+        n = int(piece.get("NumberOfPoints", "0"))
+    except ValueError:
+        raise VtuError(f"{path}: NumberOfPoints \"{piece.get('NumberOfPoints')}\" is not an integer") from None
 
     def array(el, count):
         vtype = el.get("type")
@@ -81,14 +84,26 @@ def read_vtu(path):
             raise VtuError(f"{path}: DataArray \"{el.get('Name')}\" has type \"{vtype}\", expected one of "
                            + ", ".join(_TYPES))
         dtype = np.dtype(endian + _TYPES[vtype])
-        comps = int(el.get("NumberOfComponents", "1"))
         fmt = el.get("format")
+        try:
+            comps = int(el.get("NumberOfComponents", "1"))
+            offset = int(el.get("offset")) if fmt == "appended" else 0
+        except (TypeError, ValueError):
+            raise VtuError(f"{path}: DataArray \"{el.get('Name')}\" has no valid NumberOfComponents or offset") from None
+        if comps < 1 or offset < 0:
+            raise VtuError(f"{path}: DataArray \"{el.get('Name')}\": NumberOfComponents {comps}, offset {offset}")
         if fmt == "ascii":
-            a = np.array((el.text or "").split(), dtype=dtype)
+            try:
+                a = np.array((el.text or "").split(), dtype=dtype)
+            except ValueError:
+                raise VtuError(f"{path}: DataArray \"{el.get('Name')}\": ascii values that are not {vtype}") from None
+            if count is not None and a.size != count * comps:
+                raise VtuError(f"{path}: DataArray \"{el.get('Name')}\": {a.size} ascii values, expected {count * comps} "
+                               f"({count} tuples x {comps})")
         elif fmt == "appended":
             if base is None:
                 raise VtuError(f"{path}: DataArray \"{el.get('Name')}\" is appended but the file has no AppendedData")
-            off = base + int(el.get("offset"))
+            off = base + offset
             if off + header_dtype.itemsize > len(data):
                 raise VtuError(f"{path}: DataArray \"{el.get('Name')}\" starts past the end of the file (truncated?)")
             nbytes = int(np.frombuffer(data, header_dtype, 1, off)[0])
@@ -107,7 +122,10 @@ def read_vtu(path):
     time = None
     for el in root.iterfind("UnstructuredGrid/FieldData/DataArray"):
         if el.get("Name") == "TimeValue":
-            time = float(array(el, None)[0])
+            values = array(el, None)
+            if values.size == 0:
+                raise VtuError(f"{path}: TimeValue holds no value")
+            time = float(values.flat[0])
     pts = piece.find("Points/DataArray")
     if pts is None:
         raise VtuError(f"{path}: no <Points> array")
