@@ -9,6 +9,7 @@
 #include <cmath>
 #include <numeric>
 #include <random>
+#include <utility>
 
 #include "engine/data/components.hpp"
 #include "engine/data/world.hpp"
@@ -124,35 +125,43 @@ TEST(BinnedStepSystem, EveryRowDueReachesTheLimitersFixedPointAlongChains) {
     }
 }
 
+namespace {
+
+/// Both limiter paths on the same raw field (the fixed ladder): found by cell, and pushed from
+/// every row that can bound a neighbour; prints the rows each visited.
+std::pair<Outcome, Outcome> both_paths(Raw raw) {
+    const Outcome cells = check_fixed_point(raw, 0, true);
+    const Outcome pushed = check_fixed_point(raw, 0, false);
+    std::printf("rows visited: %llu by cell, %llu pushed from every row\n",
+                static_cast<unsigned long long>(cells.visited), static_cast<unsigned long long>(pushed.visited));
+    return {cells, pushed};
+}
+
+}  // namespace
+
 // Along a plane where the raw bins drop by 4 (the flow's calm bulk beside its fast rows), the
 // same fixed point either way; found by cell, the limiter reads the lists of the rows within a
 // cell of the plane (measured: 200 of 6,000, one layer of cells) instead of those of the 3,000 fast rows,
 // each of which can bound a neighbour.
-// Stripes 3 cm wide alternately needing dt_max / 16 and dt_max along x (39 edges): the rows the
-// limiter pulls at, found by cell, are more than one 2,048-row task (every slow row lies by an edge; so that the thread
-// sanitizer's stage sees the pull's compare-and-swap lowering run concurrently), and both paths
-// still reach the serial relaxation's fixed point.
+TEST(BinnedStepSystem, EveryRowDueVisitsOnlyTheRowsNearABinEdgeByCell) {
+    const auto [cells, pushed] = both_paths(Raw::Edge);
+    EXPECT_EQ(cells.rings, 2);
+    EXPECT_EQ(pushed.rings, 2);
+    EXPECT_GE(pushed.visited, 3000u);
+    EXPECT_LT(cells.visited, 600u);  // up to three layers of cells (200 rows a layer)
+}
+
+// Stripes 3 cm wide alternately needing dt_max / 16 and dt_max along x (39 edges): every slow row
+// lies by an edge, so the rows the limiter pulls at, found by cell, are more than one 2,048-row
+// task (the thread sanitizer's stage sees the pull's compare-and-swap lowering run concurrently),
+// and both paths still reach the serial relaxation's fixed point.
 TEST(BinnedStepSystem, EveryRowDueAcrossManyEdgesPullsInSeveralTasks) {
-    const Outcome cells = check_fixed_point(Raw::Stripes, 0, true);
-    const Outcome pushed = check_fixed_point(Raw::Stripes, 0, false);
-    std::printf("rows visited: %llu by cell, %llu pushed from every row\n",
-                static_cast<unsigned long long>(cells.visited), static_cast<unsigned long long>(pushed.visited));
+    const auto [cells, pushed] = both_paths(Raw::Stripes);
     // A 3 cm stripe is 1.5 spacings wide: every slow row neighbours a fast one, so each is pulled
     // down to the fast bin + 2 (one ring) and none rises further.
     EXPECT_EQ(cells.rings, 1);
     EXPECT_EQ(pushed.rings, 1);
     EXPECT_GT(cells.visited, 2048u);  // measured 2,983: two tasks
-}
-
-TEST(BinnedStepSystem, EveryRowDueVisitsOnlyTheRowsNearABinEdgeByCell) {
-    const Outcome cells = check_fixed_point(Raw::Edge, 0, true);
-    const Outcome pushed = check_fixed_point(Raw::Edge, 0, false);
-    std::printf("rows visited: %llu by cell, %llu pushed from every row\n",
-                static_cast<unsigned long long>(cells.visited), static_cast<unsigned long long>(pushed.visited));
-    EXPECT_EQ(cells.rings, 2);
-    EXPECT_EQ(pushed.rings, 2);
-    EXPECT_GE(pushed.visited, 3000u);
-    EXPECT_LT(cells.visited, 600u);  // up to three layers of cells (200 rows a layer)
 }
 
 // BinnedBodySystem (systems/active/binned_body_system.hpp) against a scan of every row: a 4 x 16
