@@ -9,13 +9,11 @@ usage: tools/bench_table.py out/bench.json
 import json
 import re
 import sys
-from sph_python import errors_as_exit_2  # noqa: E402 (tools/ is the script's folder)
+from sph_python import errors_as_exit_2, usage_unless  # noqa: E402 (tools/ is the script's folder)
 
 errors_as_exit_2()
 
-if len(sys.argv) != 2 or sys.argv[1] in ("-h", "--help"):
-    print(__doc__.strip(), file=sys.stderr if len(sys.argv) != 2 else sys.stdout)
-    sys.exit(0 if len(sys.argv) == 2 else 2)
+usage_unless(1, __doc__)
 try:
     with open(sys.argv[1]) as f:
         data = json.load(f)

@@ -12,7 +12,7 @@ run differs (or exists on one side only).
 import json
 import pathlib
 import sys
-from sph_python import errors_as_exit_2  # noqa: E402 (tools/ is the script's folder)
+from sph_python import errors_as_exit_2, usage_unless  # noqa: E402 (tools/ is the script's folder)
 
 errors_as_exit_2()
 
@@ -69,10 +69,7 @@ def compare_run(a, b):
 
 
 def main():
-    if len(sys.argv) != 3 or sys.argv[1] in ("-h", "--help"):
-        wanted = len(sys.argv) == 2 and sys.argv[1] in ("-h", "--help")
-        print(__doc__.strip(), file=sys.stdout if wanted else sys.stderr)
-        sys.exit(0 if wanted else 2)
+    usage_unless(2, __doc__)
     before, after = pathlib.Path(sys.argv[1]), pathlib.Path(sys.argv[2])
     for d in (before, after):
         if not d.is_dir():

@@ -7,13 +7,10 @@ columns engine, configuration, wall_s, max_avg_density_error_percent (docs/resul
 import csv
 import sys
 
-if len(sys.argv) != 3 or sys.argv[1] in ("-h", "--help"):
-    wanted = len(sys.argv) == 2 and sys.argv[1] in ("-h", "--help")
-    print(__doc__.strip(), file=sys.stdout if wanted else sys.stderr)
-    sys.exit(0 if wanted else 2)
+from sph_python import errors_as_exit_2, need, usage_unless  # noqa: E402 (tools/ is the script's folder)
 
-from sph_python import errors_as_exit_2, need  # noqa: E402 (tools/ is the script's folder)
 errors_as_exit_2()
+usage_unless(2, __doc__)
 
 need("matplotlib")
 import matplotlib  # noqa: E402

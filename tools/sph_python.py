@@ -35,18 +35,16 @@ def errors_as_exit_2():
     import json
 
     default = sys.excepthook
-    tool = os.path.basename(sys.argv[0]) if sys.argv and sys.argv[0] else "tool"
 
     def hook(kind, value, tb):
+        if issubclass(kind, BrokenPipeError):  # the reader went away (`| head`): nothing to report
+            sys.exit(0)
         if issubclass(kind, OSError):
             where = f"{value.filename}: " if getattr(value, "filename", None) else ""
-            print(f"{tool}: error: {where}{value.strerror or value}", file=sys.stderr)
+            require(False, f"{where}{value.strerror or value}")
         elif issubclass(kind, (json.JSONDecodeError, UnicodeDecodeError)):
-            print(f"{tool}: error: an input file is not valid JSON or text: {value}", file=sys.stderr)
-        else:
-            default(kind, value, tb)
-            return
-        sys.exit(2)
+            require(False, f"an input file is not valid JSON or text: {value}")
+        default(kind, value, tb)
 
     sys.excepthook = hook
 
@@ -58,11 +56,8 @@ def positive_list(text, option, allow_zero=False):
         values = [float(x) for x in text.split(",")]
     except ValueError:
         values = None
-    if not values or any(not (v >= 0 if allow_zero else v > 0) for v in values):
-        tool = os.path.basename(sys.argv[0]) if sys.argv and sys.argv[0] else "tool"
-        bound = ">= 0" if allow_zero else "> 0"
-        print(f"{tool}: error: {option} {text!r}: expected comma-separated numbers {bound}", file=sys.stderr)
-        sys.exit(2)
+    require(values and all(v >= 0 if allow_zero else v > 0 for v in values),
+            f"{option} {text!r}: expected comma-separated numbers {'>= 0' if allow_zero else '> 0'}")
     return values
 
 
@@ -72,3 +67,13 @@ def require(condition, message):
         tool = os.path.basename(sys.argv[0]) if sys.argv and sys.argv[0] else "tool"
         print(f"{tool}: error: {message}", file=sys.stderr)
         sys.exit(2)
+
+
+def usage_unless(arguments, doc):
+    """A script taking `arguments` positional arguments: with -h/--help prints `doc` and exits 0;
+    with another count prints it to stderr and exits 2."""
+    if len(sys.argv) == arguments + 1 and sys.argv[1] not in ("-h", "--help"):
+        return
+    wanted = len(sys.argv) == 2 and sys.argv[1] in ("-h", "--help")
+    print(doc.strip(), file=sys.stdout if wanted else sys.stderr)
+    sys.exit(0 if wanted else 2)

@@ -211,11 +211,15 @@ class Study:
         return s
 
     def list_modes(self):
+        """The "method mode" pairs the scene loads with (asked of sph-run once, then kept)."""
+        if getattr(self, "_modes", None) is not None:
+            return self._modes
         proc = subprocess.run([self.a.sph_run, str(self.scene_path), "--list-modes", "-q"] +
                               sum((["--set", s] for s in self.common), []), capture_output=True, text=True)
         if proc.returncode != 0:
             fail(f"sph-run --list-modes failed: {proc.stderr.strip()}")
-        return [line.split() for line in proc.stdout.splitlines() if len(line.split()) == 2 and line[0] != "["]
+        self._modes = [line.split() for line in proc.stdout.splitlines() if len(line.split()) == 2 and line[0] != "["]
+        return self._modes
 
     def configurations(self):
         configs = []

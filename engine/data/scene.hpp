@@ -379,6 +379,13 @@ struct SizeEstimate {
 };
 SizeEstimate estimate_size(const Scene& scene);
 
+/// @brief Whether `method` runs with a kernel support of `support` particle spacings: WCSPH with
+/// any in [1.5, 4]; PCISPH and DFSPH with 2 only (docs/methods.md, "Known limitations"). The
+/// loader refuses a scene file against it, make_recipe a scene built in code.
+inline bool method_takes_support(Method method, double support) {
+    return method == Method::Wcsph || support == 2.0;
+}
+
 /// @brief Loads and validates a scene file. Throws SceneError (a typed InputError) naming the
 /// file, the JSON path, the value found and what was expected.
 /// @param overrides JSON-pointer paths and values applied before validation (command line).

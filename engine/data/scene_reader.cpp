@@ -235,7 +235,7 @@ class Reader {
             auto unused = s.boundary;
             read_boundary_params(root.at(*v, "boundary"), pcisph ? s.boundary : unused);
         }
-        if (!wcsph && s.fluid.support != 2.0) {
+        if (!method_takes_support(s.simulation.method, s.fluid.support)) {
             // PCISPH and DFSPH at another support were measured unstable on the resting tank
             // (support 3: PCISPH's velocities 4.5 -> 83 m/s within 5 steps of 0.1 ms, DFSPH a NaN
             // in its first density solve; docs/methods.md, "Known limitations"), so they are refused.

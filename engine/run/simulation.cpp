@@ -171,9 +171,9 @@ void Simulation::trace_non_finite(std::size_t system) {
     if (rows != nullptr && rows->size() == n) rows = nullptr;
     // Recipe order is a topological order of the graph: a value can only reach a later system,
     // so the earliest one with a non-finite output is where it was produced.
-    auto record = [&](Fault& f, std::size_t particle, const std::string& col) {
+    auto record = [&](Fault& f, std::size_t particle, const std::string& col, const Vec3& position = Vec3::Zero()) {
         std::lock_guard lock(m_trace_mutex);
-        if (system < f.system) f = Fault{system, particle, col};
+        if (system < f.system) f = Fault{system, particle, col, position};
     };
     for (const auto& wr : access.writes()) {
         if (wr.rfind("fluid.", 0) != 0) continue;
@@ -189,10 +189,7 @@ void Simulation::trace_non_finite(std::size_t system) {
                             [&](std::size_t b, std::size_t e) { return box.any_outside(x.data() + b, e - b); });
             if (bad == n) continue;
             if (finite(x[bad])) {
-                {
-                    std::lock_guard lock(m_trace_mutex);
-                    if (system < m_outside.system) m_outside = Fault{system, bad, col, x[bad]};
-                }
+                record(m_outside, bad, col, x[bad]);
                 // A non-finite position further on outranks it (the rare path: a second read).
                 bad = first_row(n, rows, [&](std::size_t i) { return !finite(x[i]); });
                 if (bad == n) continue;

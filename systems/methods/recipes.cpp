@@ -12,7 +12,7 @@ namespace sph {
 Recipe make_recipe(const Scene& scene) {
     // A scene built in code does not pass the loader's checks; this one guards a recipe that would
     // blow up (docs/methods.md, "Known limitations"), as the loader does for a scene file.
-    if (scene.simulation.method != Method::Wcsph && scene.fluid.support != 2.0)
+    if (!method_takes_support(scene.simulation.method, scene.fluid.support))
         throw InputError("fluid.support = " + std::to_string(scene.fluid.support) + ": methods \"pcisph\" and "
                          "\"dfsph\" run with the kernel support of 2 particle spacings only");
     switch (scene.simulation.method) {

@@ -55,7 +55,7 @@ void PcisphStepSizeSystem::run(Context& ctx) {
                 },
                 [](double a, double b) { return std::max(a, b); });
             AdaptiveParams params = m_params;
-            params.h = 2 * double(ctx.physics().spacing);  // Ihmsen's h = 2 r0 (adaptive_controller.hpp)
+            params.h = ihmsen_h(ctx.physics().spacing);
             const AdaptiveStepController c(params);
             pc.pending_dt = c.initial_dt(v0, m_gravity, ctx.physics().fluid_height);
         }

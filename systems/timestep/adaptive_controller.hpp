@@ -23,6 +23,10 @@ struct AdaptiveParams {
     double change = 0.002;   ///< 0.2 % per step
 };
 
+/// @brief Ihmsen et al.'s h for a fluid of lattice spacing `spacing`: 2 x spacing (their r0 = h / 2),
+/// the value of AdaptiveParams::h.
+inline double ihmsen_h(double spacing) { return 2 * spacing; }
+
 struct AdaptiveInputs {
     double dt = 0;           ///< the step just taken
     double rho_err_avg = 0;  ///< rho_err^avg(t)

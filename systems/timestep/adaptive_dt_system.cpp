@@ -32,7 +32,7 @@ void AdaptiveDtSystem::run(Context& ctx) {
     const StepStats& stats = ctx.read(res::stats);
     PcisphController& pc = ctx.write(res::pcisph_controller);
     AdaptiveParams params = m_params;
-    params.h = 2 * double(ctx.physics().spacing);  // Ihmsen's h = 2 r0 (adaptive_controller.hpp)
+    params.h = ihmsen_h(ctx.physics().spacing);
     const AdaptiveStepController c(params);
     AdaptiveInputs in;
     in.dt = st.dt_stable > 0 ? st.dt_stable : st.dt;  // a last step clipped to the end is not a decision
