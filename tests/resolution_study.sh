@@ -88,3 +88,46 @@ for bad in "--refine 1,x" "--refine 0,1" "--perturb lambda_c" "--runs 0" "--vary
     grep -q "resolution_study: error: ${bad%% *}" "$out/bad.log" || { echo "'$bad':"; cat "$out/bad.log"; exit 1; }
 done
 echo "resolution_study bad input: ok"
+
+# Runs whose output cannot be read (tests/fake_sph_run.sh: run1's summary.json truncated, run2's
+# probe files cut mid-row) are left out of their resolution's figures and named in its status;
+# the table keeps run0's figures, and the study exits 2 naming both runs after writing it.
+fake=$src/tests/fake_sph_run.sh
+export FAKE_REAL=$sph_run
+tiny=(scenes/martin_moyce.json --refine 0.5 --runs 3 --end 0.06 --sph-run "$fake")
+rc=0; FAKE_RULES='*/f0.5/run1:truncate-summary */f0.5/run2:truncate-probes' \
+    /usr/bin/python3 tools/resolution_study.py "${tiny[@]}" --out "$out/u" > "$out/u.log" 2>&1 || rc=$?
+[ "$rc" = 2 ] && ! grep -q Traceback "$out/u.log" \
+    && grep -q "^resolution_study: error: 2 of 3 runs not usable (refine 0.5 run1: unreadable: .*run1/summary.json: not valid JSON" "$out/u.log" \
+    || { echo "unreadable runs: exit $rc, expected 2 and the message"; cat "$out/u.log"; exit 1; }
+/usr/bin/python3 - "$out/u" <<'PY'
+import csv, pathlib, sys
+d = pathlib.Path(sys.argv[1])
+rows = list(csv.DictReader(open(d / "resolution.csv")))
+assert [r["probe"] for r in rows] == ["front", "front_colour", "residual_height"], rows
+for r in rows:
+    assert r["runs"] == "1" and r["particles"] == "216" and r["err_min"] == r["err_max"] == r["err_median"], r
+    assert r["status"].startswith(f"1 of 3 runs usable; run1: unreadable: {d}/f0.5/run1/summary.json: not valid JSON"), r
+    assert f"; run2: unreadable: {d}/f0.5/run2/probes/" in r["status"] and ".csv: line 6: " in r["status"], r
+md = (d / "resolution.md").read_text()
+assert md.count("\n| 9.53 mm |") == 3 and md.count("\n* refine 0.5: 1 of 3 runs usable; run1: unreadable: ") == 3, md
+assert (d / "resolution.png").is_file()
+print("resolution_study unreadable runs: ok")
+PY
+
+# A crash after the first run (the fake kills the tool as the second starts): the table holds
+# the first run's figures, marked as a resolution not finished, and no temporary file.
+rc=0; FAKE_RULES='*/f0.5/run1:kill-tool' /usr/bin/python3 tools/resolution_study.py "${tiny[@]}" --out "$out/k" \
+    > "$out/k.log" 2>&1 || rc=$?
+[ "$rc" = 137 ] || { echo "killed study: exit $rc, expected 137"; cat "$out/k.log"; exit 1; }
+/usr/bin/python3 - "$out/k" <<'PY'
+import csv, pathlib, sys
+d = pathlib.Path(sys.argv[1])
+rows = list(csv.DictReader(open(d / "resolution.csv")))
+assert [(r["probe"], r["runs"], r["status"]) for r in rows] == \
+    [(p, "1", "1 of 3 runs run so far") for p in ("front", "front_colour", "residual_height")], rows
+assert all(float(r["err_median"]) > 0 for r in rows), rows
+assert (d / "resolution.md").read_text().count("\n| 9.53 mm |") == 3
+assert not [p for p in d.iterdir() if ".tmp" in p.name], list(d.iterdir())
+print("resolution_study killed after one run: ok")
+PY

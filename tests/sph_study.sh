@@ -131,3 +131,70 @@ check_refused "reference /nonexistent: no readable summary.json" scenes/martin_m
 check_refused "out /proc/x: cannot create the output folder" scenes/martin_moyce.json --out /proc/x
 check_refused "truncated.json: not a readable JSON scene" "$out/truncated.json" --out "$out/r"
 echo "sph-study bad arguments: ok"
+
+# A run that exits 0 but leaves output that cannot be read (tests/fake_sph_run.sh: a truncated
+# summary.json, no probes/) is a row "unreadable: <file>: <reason>", the other runs' rows and the
+# reference are complete, and the study exits 2 naming the runs, after writing the tables.
+fake=$src/tests/fake_sph_run.sh
+export FAKE_REAL=$tools/sph-run
+tiny=(scenes/martin_moyce.json --scale 0.296296 --end 0.02 --sph-run "$fake" --no-default-modes --config global
+      --config individual --config binned --config "individual --set stepping.lambda_v=0.1 --name ind-0.1")
+rc=0; FAKE_RULES='*/02_individual:truncate-summary */03_binned:no-probes' \
+    "$tools/sph-study" "${tiny[@]}" --out "$out/u" > "$out/ulog" 2>&1 || rc=$?
+[ "$rc" -eq 2 ] && ! grep -q Traceback "$out/ulog" \
+    && grep -q "^sph-study: error: 2 run(s) unreadable (individual: unreadable: .*02_individual/summary.json: not valid JSON" "$out/ulog" \
+    || { echo "unreadable runs: exit $rc, expected 2 and the message"; cat "$out/ulog"; exit 1; }
+/usr/bin/python3 - "$out/u" <<'PY'
+import csv, pathlib, sys
+d = pathlib.Path(sys.argv[1])
+rows = {r["configuration"]: r for r in csv.DictReader(open(d / "study.csv"))}
+assert list(rows) == ["global", "individual", "binned", "ind-0.1"], list(rows)
+assert rows["individual"]["status"].startswith(f"unreadable: {d}/02_individual/summary.json: not valid JSON"), rows["individual"]
+assert rows["binned"]["status"] == f"unreadable: {d}/03_binned/probes/front.csv: no such file (the run was to write every probe of the scene)", rows["binned"]
+for name in ("global", "ind-0.1"):  # complete, accuracy included
+    r = rows[name]
+    assert r["status"] == "ok" and float(r["wall_s"]) > 0 and float(r["deviation (mean rel.)"]) >= 0, r
+md = (d / "study.md").read_text()
+assert "| individual | unreadable: " in md and "| binned | unreadable: " in md and "Reference: constant" in md, md
+assert (d / "pareto.png").is_file()
+print("sph-study unreadable runs: ok")
+PY
+
+# The reference run fails: the rows keep their cost columns, the accuracy columns say why they
+# are empty, no Pareto plot; exit 2 with one line.
+rc=0; FAKE_RULES='*/reference:fail' "$tools/sph-study" "${tiny[@]}" --out "$out/f" > "$out/flog" 2>&1 || rc=$?
+[ "$rc" -eq 2 ] && ! grep -q Traceback "$out/flog" && [ "$(grep -c "^sph-study: error:" "$out/flog")" -eq 1 ] \
+    && grep -q "^sph-study: error: the accuracy columns are unavailable: the reference run failed (exit 3), see .*reference/run.log" "$out/flog" \
+    || { echo "failed reference: exit $rc, expected 2 and the message"; cat "$out/flog"; exit 1; }
+/usr/bin/python3 - "$out/f" <<'PY'
+import csv, pathlib, sys
+d = pathlib.Path(sys.argv[1])
+rows = list(csv.DictReader(open(d / "study.csv")))
+assert [r["configuration"] for r in rows] == ["global", "individual", "binned", "ind-0.1"], rows
+why = f"unavailable: the reference run failed (exit 3), see {d}/reference/run.log"
+for r in rows:
+    assert r["status"] == "ok" and float(r["wall_s"]) > 0 and int(r["steps"]) > 0 and float(r["speedup_vs_global"]) > 0, r
+    dev = [k for k in r if k.startswith("dev ")]
+    assert dev and all(r[k] == why for k in dev) and r["deviation (mean rel.)"] == why, r
+    float(r["exp err front %"])  # the experiment's column needs no reference: still a number (nan this early)
+md = (d / "study.md").read_text()
+assert f"Reference: {why}." in md and "| global | 315 |" in md and "| unavailable |" in md, md
+assert not (d / "pareto.png").exists() and (d / "dt.png").is_file()
+print("sph-study failed reference: ok")
+PY
+
+# A crash of the study after its first run (the fake sph-run kills it when the second starts):
+# study.csv and study.md hold the first run's row, complete, and no temporary file is left.
+rc=0; FAKE_RULES='*/02_individual:kill-tool' "$tools/sph-study" "${tiny[@]}" --out "$out/k" > "$out/klog" 2>&1 || rc=$?
+[ "$rc" -eq 137 ] || { echo "killed study: exit $rc, expected 137"; cat "$out/klog"; exit 1; }
+/usr/bin/python3 - "$out/k" <<'PY'
+import csv, pathlib, sys
+d = pathlib.Path(sys.argv[1])
+rows = list(csv.DictReader(open(d / "study.csv")))
+assert [(r["configuration"], r["status"]) for r in rows] == [("global", "ok")], rows
+assert float(rows[0]["wall_s"]) > 0 and rows[0]["deviation (mean rel.)"].startswith("pending"), rows
+md = (d / "study.md").read_text()
+assert "| global | 315 |" in md and "Partial: 3 of 4 configurations still to run." in md, md
+assert not [p for p in d.iterdir() if ".tmp" in p.name], list(d.iterdir())
+print("sph-study killed after one run: ok")
+PY

@@ -2,6 +2,8 @@
 # Frames and plots of individual time stepping, end to end: a short dam break in `individual`
 # mode writes frames whose dt/active arrays agree with stats.csv and summary.json; render_dt.py
 # and plot_dt.py draw them with the stated size and colours; bad input exits 2 naming the file.
+# Then mode_table.py and boundary_sweep.py on tiny runs whose output a fake sph-run spoils or
+# during which it kills the tool: the tables keep every readable row (section 6).
 # Each check prints what it expected when it fails.
 set -uo pipefail
 run=$1; src=$2
@@ -191,6 +193,56 @@ check "stats.csv without active_fraction exits 2 naming the column (got $rc)" \
 /usr/bin/python3 -S "$src/tools/plot_dt.py" "$tmp/old.csv" 2>"$tmp/err6"; rc=$?
 check "no numpy: exit 2 naming python3-numpy (got $rc)" \
   '[ $rc -eq 2 ] && grep -q "plot_dt.py: needs numpy, .*apt-get install python3-numpy" "$tmp/err6" && ! grep -q Traceback "$tmp/err6"'
+
+# 6. mode_table.py and boundary_sweep.py when a run's output cannot be read or the tool dies
+#    (tests/fake_sph_run.sh: the real sph-run, misbehaving for the runs its rules name): the
+#    table is written after every run, a bad run is a marked row beside the complete others, the
+#    tool exits 2 naming it; killed during a run, the table holds the runs before, complete.
+fake="$src/tests/fake_sph_run.sh"
+export FAKE_REAL="$run"
+mt=("$py" "$src/tools/mode_table.py" "$src/scenes/martin_moyce.json" --scales 0.296296 --end 0.02 --sph-run "$fake")
+"${mt[@]}" --extra foo --out "$tmp/mt0" 2>"$tmp/mt0.err"; rc=$?
+check "mode_table --extra foo: exit 2 before any run (got $rc)" \
+  '[ $rc -eq 2 ] && [ ! -e "$tmp/mt0" ] && grep -q "^mode_table.py: error: --extra '"'foo'"': no '"':'"' after the name; expected NAME:KEY=VALUE\[,KEY=VALUE...\]" "$tmp/mt0.err"'
+"${mt[@]}" --extra "lv:simulation.stepping.lambda_v" --out "$tmp/mt0" 2>"$tmp/mt0.err"; rc=$?
+check "mode_table --extra NAME:KEY (no =): exit 2 before any run (got $rc)" \
+  '[ $rc -eq 2 ] && [ ! -e "$tmp/mt0" ] && grep -q "'"'simulation.stepping.lambda_v' is not KEY=VALUE"'" "$tmp/mt0.err"'
+FAKE_RULES='*_individual:truncate-summary' "${mt[@]}" --extra "lv:simulation.stepping.mode=individual,simulation.stepping.lambda_v=0.1" \
+  --out "$tmp/mt" >"$tmp/mt.out" 2>"$tmp/mt.err"; rc=$?
+check "mode_table, individual's summary.json truncated: exit 2 naming it (got $rc)" \
+  '[ $rc -eq 2 ] && ! grep -q Traceback "$tmp/mt.err" && grep -q "^mode_table.py: error: 1 run(s) not usable (scale 0.296296 individual: unreadable: .*_individual/summary.json: not valid JSON" "$tmp/mt.err"'
+"$py" - "$tmp/mt" <<'EOF2'; rc=$?
+import csv, pathlib, sys
+d = pathlib.Path(sys.argv[1])
+rows = {r["mode"]: r for r in csv.DictReader(open(d / "mode_table.csv"))}
+bad = []
+if list(rows) != ["constant", "global", "individual", "lv"]: bad.append(f"rows constant, global, individual, lv; found {list(rows)}")
+for m in ("constant", "global", "lv"):
+    r = rows.get(m, {})
+    if r.get("status") != "ok" or r.get("particles") != "315" or not float(r.get("wall_s") or 0) > 0:
+        bad.append(f"{m}: a complete row, found {r}")
+r = rows.get("individual", {})
+if not (r.get("status", "").startswith(f"unreadable: {d}/scale0.296296_individual/summary.json: not valid JSON") and r.get("runs") == "0"
+        and r.get("wall_s") == ""):
+    bad.append(f"individual: marked unreadable, no figures; found {r}")
+if "| individual | unreadable: " not in (d / "mode_table.md").read_text(): bad.append("mode_table.md marks individual")
+for b in bad: print("  expected:", b)
+sys.exit(1 if bad else 0)
+EOF2
+check "mode_table.csv/.md: the unreadable run marked, the other three rows complete" '[ $rc -eq 0 ]'
+FAKE_RULES='*_individual:kill-tool' "${mt[@]}" --out "$tmp/mtk" >/dev/null 2>&1; rc=$?
+check "mode_table killed at its third run (got $rc): the table has the first two, complete" \
+  '[ $rc -eq 137 ] && [ "$(cut -d, -f2,21 "$tmp/mtk/mode_table.csv" | tr -d "\r" | tr "\n" " ")" = "mode,status constant,ok global,ok " ] && [ -z "$(ls -A "$tmp/mtk" | grep tmp)" ]'
+bs=("$py" "$src/tools/boundary_sweep.py" --scene "$src/scenes/corner_breaking_dam.json" --scale 0.1 --end 0.01
+    --dts 0.001,0.002 --sph-run "$fake")
+FAKE_RULES='*/ihmsen_0.002/run:truncate-probes' "${bs[@]}" --out "$tmp/bs" >"$tmp/bs.out" 2>"$tmp/bs.err"; rc=$?
+check "boundary_sweep, a probe file cut mid-row: exit 2 naming it (got $rc)" \
+  '[ $rc -eq 2 ] && ! grep -q Traceback "$tmp/bs.err" && grep -q "^boundary_sweep.py: error: 1 run(s) unreadable (ihmsen Δt 0.002: .*ihmsen_0.002/run/probes/fluid.csv: line 6: " "$tmp/bs.err"'
+check "boundary_sweep.md: that row marked, the other three completed" \
+  '[ "$(grep -c "| completed |" "$tmp/bs/boundary_sweep.md")" -eq 3 ] && grep -q "^| ihmsen | 0.002 | unreadable: .*fluid.csv: line 6: " "$tmp/bs/boundary_sweep.md" && grep -q "ihmsen: whole fluid 0.001, interior 0.001 (a run was unreadable: a lower bound)" "$tmp/bs/boundary_sweep.md"'
+FAKE_RULES='*/direct_forcing_0.001/run:kill-tool' "${bs[@]}" --out "$tmp/bsk" >/dev/null 2>&1; rc=$?
+check "boundary_sweep killed at its third run (got $rc): boundary_sweep.md has the first two rows" \
+  '[ $rc -eq 137 ] && [ "$(grep -c "^| ihmsen | 0.00[12] | completed |" "$tmp/bsk/boundary_sweep.md")" -eq 2 ] && ! grep -q "^| direct_forcing" "$tmp/bsk/boundary_sweep.md"'
 
 [ $fail -eq 0 ] && echo "tools plots: all checks passed"
 exit $fail

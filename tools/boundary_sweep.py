@@ -12,16 +12,25 @@ Runs one at a time, in increasing dt, and stops a handling once a step fails on 
 average over the interior fluid (no boundary particle within h; a fluid probe sampled every
 step), which leaves out the wall layer where the handlings differ in what they count.
 Prints a Markdown table; writes boundary_sweep.md.
+
+When and failures. boundary_sweep.md is rewritten after every run (into a temporary file in
+--out, then renamed onto it: never half-written), so an interrupted or crashed sweep keeps the
+rows of the runs it finished. A run sph-run reports failed is a row "failed (exit N)", as a step
+too large; a run that exits 0 but whose summary.json or probes/fluid.csv cannot be read (missing,
+truncated, not JSON or CSV) is a row "unreadable: <file>: <reason>" and ends its handling's sweep
+like a failed step (the largest Δt found is then a lower bound). Exit codes: 0 every run readable
+(failed steps included); 2 bad arguments, or, after writing the table, a run unreadable (one
+line, `boundary_sweep.py: error: ...`); 130 interrupted (Ctrl-C).
 """
 import argparse
-import csv
 import json
 import pathlib
 import statistics
 import subprocess
 import sys
 import time
-from sph_python import errors_as_exit_2, positive_list, require  # noqa: E402 (tools/ is the script's folder)
+from sph_python import Unreadable, errors_as_exit_2, positive_list, read_csv_columns, read_json_object, reading, \
+    require, write_atomic  # noqa: E402 (tools/ is the script's folder)
 
 errors_as_exit_2()
 
@@ -40,9 +49,30 @@ require(args.eta > 0, f"--eta {args.eta}: expected a fraction > 0")
 out_root = pathlib.Path(args.out)
 out_root.mkdir(parents=True, exist_ok=True)
 rows = []
+unreadable = []  # "<handling> Δt <dt>: <file>: <reason>"
 best = {}        # handling -> largest dt passing on the whole-fluid average (the paper's measure)
 best_inner = {}  # handling -> largest dt passing on the interior average (no wall within h)
 scene = json.loads(pathlib.Path(args.scene).read_text())
+
+
+def table():
+    """The Markdown table of the runs so far."""
+    fluid = next((r[9] for r in rows if r[9]), 0)
+    lines = [f"{fluid} fluid particles, constant Δt, 3 iterations, 0-{args.end:g} s; "
+             "ρ_err = max(ρ/ρ0 − 1, 0); interior: fluid particles with no boundary particle within h",
+             "",
+             "| boundary | Δt (s) | outcome | max(ρ_err_avg) | below 1 % | max(ρ_err_avg), interior | below 1 % | interior particles (median) | max ρ_err |",
+             "|---|---|---|---|---|---|---|---|---|"]
+    for h, dt, st, err, ok, inner, ok_inner, inner_n, err_max, _ in rows:
+        lines.append(f"| {h} | {dt:g} | {st.replace('|', chr(92) + '|')} | {100 * err:.2f} % | {'yes' if ok else 'no'} | "
+                     f"{100 * inner:.2f} % | {'yes' if ok_inner else 'no'} | {inner_n:.0f} | {100 * err_max:.2f} % |")
+    lines.append("")
+    for h in ("ihmsen", "direct_forcing"):
+        lines.append(f"largest Δt below {100 * args.eta:g} %: {h}: whole fluid {best.get(h, 'none of the steps tried')}, "
+                     f"interior {best_inner.get(h, 'none of the steps tried')}"
+                     + (" (a run was unreadable: a lower bound)" if any(r[0] == h and r[2].startswith("unreadable")
+                                                                          for r in rows) else ""))
+    return "\n".join(lines) + "\n"
 for handling in ("ihmsen", "direct_forcing"):
     failed_whole = failed_inner = False
     for dt in DTS:
@@ -59,38 +89,36 @@ for handling in ("ihmsen", "direct_forcing"):
                "--set", f"boundary.handling={handling}", "--set", "pcisph.iterations=3", "--set", "pcisph.loop=fixed"]
         print(f"[{time.strftime('%H:%M:%S')}] {' '.join(cmd)}", file=sys.stderr, flush=True)
         p = subprocess.run(cmd, capture_output=True, text=True)
+        err = err_max = inner = inner_n = float("nan")
+        status, fluid = f"failed (exit {p.returncode})", 0
         if p.returncode == 0:
-            s = json.loads((out / "run" / "summary.json").read_text())
-            err, err_max, status = s["max_avg_density_error"], s["max_density_error"], "completed"
-            with open(out / "run" / "probes" / "fluid.csv") as f:
-                probe = list(csv.DictReader(f))
-            inner = max(float(r["rho_err_avg_interior"]) for r in probe)
-            inner_n = statistics.median(float(r["interior_count"]) for r in probe)
-            fluid = s["fluid_particles"]
-        else:
-            err = err_max = inner = inner_n = float("nan")
-            status, fluid = f"failed (exit {p.returncode})", 0
-        ok, ok_inner = p.returncode == 0 and err < args.eta, p.returncode == 0 and inner < args.eta
+            try:
+                s = read_json_object(out / "run" / "summary.json",
+                                     numbers=("max_avg_density_error", "max_density_error", "fluid_particles"))
+                with reading(out / "run" / "probes" / "fluid.csv"):
+                    probe = read_csv_columns(out / "run" / "probes" / "fluid.csv",
+                                             ("rho_err_avg_interior", "interior_count"), min_rows=1)
+                err, err_max, status = s["max_avg_density_error"], s["max_density_error"], "completed"
+                inner = max(probe["rho_err_avg_interior"])
+                inner_n = statistics.median(probe["interior_count"])
+                fluid = s["fluid_particles"]
+            except Unreadable as e:
+                status = f"unreadable: {e}"
+                unreadable.append(f"{handling} Δt {dt:g}: {e}")
+                print(f"boundary_sweep.py: {status}", file=sys.stderr, flush=True)
+        ok, ok_inner = status == "completed" and err < args.eta, status == "completed" and inner < args.eta
         rows.append((handling, dt, status, err, ok, inner, ok_inner, inner_n, err_max, fluid))
         if ok and not failed_whole:
             best[handling] = dt
         if ok_inner and not failed_inner:
             best_inner[handling] = dt
         failed_whole, failed_inner = failed_whole or not ok, failed_inner or not ok_inner
+        text = table()
+        write_atomic(out_root / "boundary_sweep.md", text)
         if failed_whole and failed_inner:
             break
-lines = [f"{rows[0][9] if rows else 0} fluid particles, constant Δt, 3 iterations, 0-{args.end:g} s; "
-         "ρ_err = max(ρ/ρ0 − 1, 0); interior: fluid particles with no boundary particle within h",
-         "",
-         "| boundary | Δt (s) | outcome | max(ρ_err_avg) | below 1 % | max(ρ_err_avg), interior | below 1 % | interior particles (median) | max ρ_err |",
-         "|---|---|---|---|---|---|---|---|---|"]
-for h, dt, st, err, ok, inner, ok_inner, inner_n, err_max, fluid in rows:
-    lines.append(f"| {h} | {dt:g} | {st} | {100 * err:.2f} % | {'yes' if ok else 'no'} | {100 * inner:.2f} % | "
-                 f"{'yes' if ok_inner else 'no'} | {inner_n:.0f} | {100 * err_max:.2f} % |")
-lines.append("")
-for h in ("ihmsen", "direct_forcing"):
-    lines.append(f"largest Δt below {100 * args.eta:g} %: {h}: whole fluid {best.get(h, 'none of the steps tried')}, "
-                 f"interior {best_inner.get(h, 'none of the steps tried')}")
-text = "\n".join(lines) + "\n"
+text = table()
+write_atomic(out_root / "boundary_sweep.md", text)
 print(text)
-(out_root / "boundary_sweep.md").write_text(text)
+require(not unreadable, f"{len(unreadable)} run(s) unreadable ({'; '.join(unreadable)}); "
+                        f"{out_root / 'boundary_sweep.md'} has every other row")

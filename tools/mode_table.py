@@ -15,10 +15,18 @@ The `constant` run uses the smallest step the `global` run of the same size took
 `min_dt_s`), i.e. the largest fixed step known to be stable for the whole run, which is how
 a user without adaptivity would have to choose it. Each run's outputs stay in --out/<size>_<mode>/.
 Prints a Markdown table and writes mode_table.md and mode_table.csv into --out.
+
+When and failures. mode_table.md and mode_table.csv are rewritten after every run (into a
+temporary file in --out, then renamed onto the table: never half-written), so an interrupted or
+crashed table keeps the configurations run so far (medians over the runs so far). A run sph-run
+reports failed, or whose summary.json cannot be read, is left out of its row's medians and named
+in the row's `status` (CSV) and under the table: "failed (exit N)", "unreadable: <file>:
+<reason>"; a configuration with no usable run is a row with only that status, and without a usable
+first `global` run the `constant` one is skipped. Exit codes: 0 every run usable; 2 bad
+arguments (a malformed --extra, say), before any run, or, after writing the tables, a run failed
+or unreadable (one line, `mode_table.py: error: ...`); 130 interrupted (Ctrl-C).
 """
 import argparse
-import csv
-import json
 import os
 import pathlib
 import platform
@@ -26,7 +34,8 @@ import subprocess
 import statistics
 import sys
 import time
-from sph_python import errors_as_exit_2, positive_list, require  # noqa: E402 (tools/ is the script's folder)
+from sph_python import Unreadable, csv_text, errors_as_exit_2, positive_list, read_json_object, require, \
+    write_atomic  # noqa: E402 (tools/ is the script's folder)
 
 errors_as_exit_2()
 
@@ -40,21 +49,47 @@ ap.add_argument("--repeat", type=int, default=1, help="runs per configuration, i
 ap.add_argument("--sph-run", default="build/tools/sph-run")
 ap.add_argument("--out", default="out/mode_table")
 ap.add_argument("--reuse", action="store_true",
-                help="read a run's summary.json from --out if it is there instead of running it again "
-                     "(re-tabulates an earlier or interrupted table with the same options)")
+                help="read a run's summary.json from --out if it is there and readable instead of running it "
+                     "again (re-tabulates an earlier or interrupted table with the same options)")
 ap.add_argument("--extra", action="append", default=[],
-                help="an extra configuration, e.g. 'individual(global λ):simulation.stepping.mode=individual,"
-                     "simulation.stepping.lambda_v=0.1'")
+                help="an extra configuration NAME:KEY=VALUE[,KEY=VALUE...], e.g. 'individual(global λ):"
+                     "simulation.stepping.mode=individual,simulation.stepping.lambda_v=0.1'")
 args = ap.parse_args()
 SCALES = positive_list(args.scales, "--scales")
 require(args.repeat >= 1, f"--repeat {args.repeat}: expected at least 1")
 
-if not pathlib.Path(args.sph_run).exists():
-    sys.exit(f"{args.sph_run}: not found (build first: cmake --build build)")
+
+def parse_extra(spec, taken):
+    """NAME:KEY=VALUE,... -> (NAME, [KEY=VALUE, ...]); exit 2 naming the spec otherwise."""
+    form = "expected NAME:KEY=VALUE[,KEY=VALUE...], e.g. 'lv0.1:simulation.stepping.mode=individual," \
+           "simulation.stepping.lambda_v=0.1'"
+    name, colon, rest = spec.partition(":")
+    name = name.strip()
+    require(colon, f"--extra {spec!r}: no ':' after the name; {form}")
+    require(name, f"--extra {spec!r}: empty name; {form}")
+    require(name not in taken, f"--extra {spec!r}: the name {name!r} is taken (global, constant, individual "
+                               f"and each --extra need their own); {form}")
+    sets = [s.strip() for s in rest.split(",") if s.strip()]
+    require(sets, f"--extra {spec!r}: no KEY=VALUE after the ':'; {form}")
+    for s in sets:
+        key, eq, _ = s.partition("=")
+        require(eq and key.strip(), f"--extra {spec!r}: {s!r} is not KEY=VALUE; {form}")
+    return name, sets
+
+
+EXTRAS = []
+for spec in args.extra:  # refused before any run
+    EXTRAS.append(parse_extra(spec, {"global", "constant", "individual"} | {n for n, _ in EXTRAS}))
+
+require(pathlib.Path(args.sph_run).exists(), f"{args.sph_run}: not found (build first: cmake --build build)")
 out_root = pathlib.Path(args.out)
+out_root.mkdir(parents=True, exist_ok=True)
+SUMMARY_NUMBERS = ("wall_time_s", "steps", "fluid_particles", "simulated_time_s", "avg_dt_s", "min_dt_s", "max_dt_s",
+                   "avg_active_fraction", "max_density_error", "boundary_collisions_total")
 
 
 def run(tag, scale, sets, rep=0):
+    """(summary, None) of a run, or (None, "failed (exit N)" / "unreadable: <file>: <reason>")."""
     name = tag.replace(' ', '_').replace('(', '').replace(')', '')
     out = out_root / f"scale{scale:g}_{name}" / f"run{rep}" if args.repeat > 1 else out_root / f"scale{scale:g}_{name}"
     cmd = [args.sph_run, args.scene, "--scale", str(scale), "--threads", str(args.threads), "--no-frames", "-q",
@@ -64,93 +99,147 @@ def run(tag, scale, sets, rep=0):
     for s in sets:
         cmd += ["--set", s]
     if args.reuse and (out / "summary.json").exists():
-        print(f"reusing {out / 'summary.json'}", file=sys.stderr, flush=True)
-        return json.loads((out / "summary.json").read_text())
+        try:
+            s = read_json_object(out / "summary.json", numbers=SUMMARY_NUMBERS, keys=("scene",))
+            print(f"reusing {out / 'summary.json'}", file=sys.stderr, flush=True)
+            return s, None
+        except Unreadable as e:
+            print(f"not reusing {e}: running it again", file=sys.stderr, flush=True)
     print(f"[{time.strftime('%H:%M:%S')}] {' '.join(cmd)}", file=sys.stderr, flush=True)
     proc = subprocess.run(cmd, capture_output=True, text=True)
     if proc.returncode != 0:
-        sys.exit(f"run failed (exit {proc.returncode}): {' '.join(cmd)}\n{proc.stderr.strip()}")
-    return json.loads((out / "summary.json").read_text())
+        print(f"run failed (exit {proc.returncode}): {' '.join(cmd)}\n{proc.stderr.strip()}", file=sys.stderr, flush=True)
+        return None, f"failed (exit {proc.returncode})"
+    try:
+        return read_json_object(out / "summary.json", numbers=SUMMARY_NUMBERS, keys=("scene",)), None
+    except Unreadable as e:
+        print(f"unreadable: {e}", file=sys.stderr, flush=True)
+        return None, f"unreadable: {e}"
 
 
 def fronts(s):
     return [f["x"] for f in s.get("front_x_m_at", [])]
 
 
-rows = []
-system_tables = []  # per scale: (configurations, {system: {configuration: ms per step}})
+def tabulate(sizes):
+    """The rows and the Markdown text of every configuration run so far. sizes: per scale,
+    (scale, configurations, {name: [summaries]}, {name: [problems]}, {name: status if skipped})."""
+    rows, system_tables, notes = [], [], []
+    for scale, configs, runs, problems, skipped in sizes:
+        med = {name: (statistics.median(r["wall_time_s"] for r in rs), statistics.median(r.get("cpu_time_s", float("nan")) for r in rs))
+               for name, rs in runs.items() if rs}
+        g = runs["global"][0] if runs.get("global") else None
+        per_step = {}
+        for name, rs in runs.items():
+            for r in rs:
+                for sy in r.get("systems", []):
+                    per_step.setdefault(sy["name"], {}).setdefault(name, []).append(1e3 * sy["seconds"] / max(r["steps"], 1))
+        extras = [n for n, _ in configs if n not in ("global", "constant", "individual")]
+        order = [n for n in ["constant", "global", "individual"] + extras
+                 if runs.get(n) or problems.get(n) or n in skipped]
+        for name in order:
+            rs, probs = runs.get(name, []), problems.get(name, [])
+            status = skipped.get(name) or "; ".join(probs) or "ok"
+            if probs and rs:
+                status = f"{len(rs)} of {len(rs) + len(probs)} runs usable; {status}"
+            if status != "ok":
+                notes.append(f"* {name}, scale {scale:g}: {status}")
+            if not rs:
+                rows.append({"scene": pathlib.Path(args.scene).stem, "mode": name, "runs": 0, "status": status})
+                continue
+            s = rs[0]
+            wall, cpu = med[name]
+            gf, sf = (fronts(g) if g else []), fronts(s)
+            dev = max((abs(a - b) / abs(b) for a, b in zip(sf, gf) if b), default=float("nan"))
+            rows.append({
+                "scene": s["scene"], "mode": name, "particles": s["fluid_particles"],
+                "simulated_s": s["simulated_time_s"], "runs": len(rs), "wall_s": wall, "cpu_s": cpu, "steps": s["steps"],
+                "avg_dt_ms": 1e3 * s["avg_dt_s"], "min_dt_ms": 1e3 * s["min_dt_s"], "max_dt_ms": 1e3 * s["max_dt_s"],
+                "avg_active_pct": 100 * s["avg_active_fraction"], "max_density_error_pct": 100 * s["max_density_error"],
+                "front_t_s": " ".join(f"{f['t']:.2f}" for f in s.get("front_x_m_at", [])),
+                "front_x_m": " ".join(f"{x:.3f}" for x in sf), "front_dev_vs_global_pct": 100 * dev,
+                "collisions": s["boundary_collisions_total"],
+                "speedup_vs_global": med["global"][0] / wall if "global" in med else float("nan"),
+                "speedup_vs_global_cpu": med["global"][1] / cpu if "global" in med else float("nan"),
+                "speedup_vs_constant": med["constant"][0] / wall if "constant" in med else float("nan"),
+                "status": status,
+            })
+        system_tables.append((scale, order, {sy: {n: statistics.median(v) for n, v in c.items()} for sy, c in per_step.items()}))
+
+    machine = f"{os.cpu_count()} cores, {platform.processor() or platform.machine()}"
+    lines = [f"`{pathlib.Path(args.scene).name}`, {args.threads} threads, {machine}, "
+             f"{time.strftime('%Y-%m-%d')}; runs one after another, no frames written; "
+             f"{args.repeat} run(s) per configuration, interleaved, median times; front deviation is the largest "
+             f"|x - x_global| / x_global over the three times.", "",
+             "| mode | particles | simulated s | wall s | CPU s | steps | avg Δt_sim ms (min–max) | avg active | "
+             "max ρ error | front x m at t s | front vs global | net catches | speed-up vs global: wall, CPU (wall vs constant) |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        if not r["runs"]:
+            lines.append(f"| {r['mode']} | {r['status'].replace('|', chr(92) + '|')} |" + " |" * 11)
+            continue
+        lines.append(f"| {r['mode']} | {r['particles']:,} | {r['simulated_s']:.2f} | {r['wall_s']:.1f} | {r['cpu_s']:.1f} | {r['steps']:,} | "
+                     f"{r['avg_dt_ms']:.3f} ({r['min_dt_ms']:.3f}–{r['max_dt_ms']:.3f}) | {r['avg_active_pct']:.0f} % | "
+                     f"{r['max_density_error_pct']:.1f} % | {r['front_x_m']} at {r['front_t_s']} | {r['front_dev_vs_global_pct']:.1f} % | {r['collisions']} | "
+                     f"{r['speedup_vs_global']:.2f}, {r['speedup_vs_global_cpu']:.2f} ({r['speedup_vs_constant']:.2f}) |")
+    if notes:
+        lines += [""] + notes
+    # Where a step's time goes: each system's wall time per step from summary.json (median over the
+    # runs of a configuration); a system a configuration does not build shows a dash.
+    for scale, order, table in system_tables:
+        lines += ["", f"Milliseconds per step by system (scale {scale:g}; median over the runs; `step` is their sum):", "",
+                  "| system | " + " | ".join(order) + " |", "|---|" + "---|" * len(order)]
+        for sy, by in table.items():
+            lines.append(f"| {sy} | " + " | ".join(f"{by[n]:.2f}" if n in by else "–" for n in order) + " |")
+        lines.append("| **step** | " + " | ".join(f"**{sum(by.get(n, 0.0) for by in table.values()):.2f}**" for n in order) + " |")
+    return rows, "\n".join(lines) + "\n"
+
+
+COLUMNS = ["scene", "mode", "particles", "simulated_s", "runs", "wall_s", "cpu_s", "steps", "avg_dt_ms", "min_dt_ms",
+           "max_dt_ms", "avg_active_pct", "max_density_error_pct", "front_t_s", "front_x_m", "front_dev_vs_global_pct",
+           "collisions", "speedup_vs_global", "speedup_vs_global_cpu", "speedup_vs_constant", "status"]
+
+
+def write_tables(sizes):
+    rows, text = tabulate(sizes)
+    write_atomic(out_root / "mode_table.md", text)
+    write_atomic(out_root / "mode_table.csv", csv_text(rows, COLUMNS))
+    return text
+
+
+sizes = []
 for scale in SCALES:
-    # The first global run also fixes the constant step (its smallest step).
-    first = run("global", scale, ["simulation.stepping.mode=global"], 0)
     configs = [("global", ["simulation.stepping.mode=global"])]
+    runs, problems, skipped = {}, {}, {}
+    sizes.append((scale, configs, runs, problems, skipped))
+
+    def record(name, result):
+        s, problem = result
+        if s:
+            runs.setdefault(name, []).append(s)
+        else:
+            problems.setdefault(name, []).append(problem)
+        write_tables(sizes)
+
+    # The first global run also fixes the constant step (its smallest step).
+    result = run("global", scale, configs[0][1], 0)
+    first = result[0]
+    record("global", result)
     if not args.no_constant:
-        configs.append(("constant", ["simulation.stepping.mode=constant", f"simulation.stepping.dt={first['min_dt_s']!r}"]))
+        configs.append(("constant", ["simulation.stepping.mode=constant"] +
+                        ([f"simulation.stepping.dt={first['min_dt_s']!r}"] if first else [])))
+        if not first:
+            skipped["constant"] = "skipped: its step is the first global run's smallest, and that run is not usable"
     configs.append(("individual", ["simulation.stepping.mode=individual"]))
-    for spec in args.extra:
-        name, _, sets = spec.partition(":")
-        configs.append((name, [s for s in sets.split(",") if s]))
-    runs = {name: [] for name, _ in configs}
-    runs["global"].append(first)
+    configs += EXTRAS
     for rep in range(args.repeat):
         for name, sets in configs:
-            if name == "global" and rep == 0:
+            if (name == "global" and rep == 0) or name in skipped:
                 continue
-            runs[name].append(run(name, scale, sets, rep))
-    med = {name: (statistics.median(r["wall_time_s"] for r in rs), statistics.median(r.get("cpu_time_s", float("nan")) for r in rs))
-           for name, rs in runs.items()}
-    g = runs["global"][0]
-    per_step = {}
-    for name, rs in runs.items():
-        for r in rs:
-            for sy in r.get("systems", []):
-                per_step.setdefault(sy["name"], {}).setdefault(name, []).append(1e3 * sy["seconds"] / max(r["steps"], 1))
-    extras = [n for n, _ in configs if n not in ("global", "constant", "individual")]
-    order = (["constant"] if "constant" in runs else []) + ["global", "individual"] + extras
-    for name in order:
-        s = runs[name][0]
-        wall, cpu = med[name]
-        gf, sf = fronts(g), fronts(s)
-        dev = max((abs(a - b) / abs(b) for a, b in zip(sf, gf) if b), default=float("nan"))
-        rows.append({
-            "scene": s["scene"], "mode": name, "particles": s["fluid_particles"],
-            "simulated_s": s["simulated_time_s"], "runs": len(runs[name]), "wall_s": wall, "cpu_s": cpu, "steps": s["steps"],
-            "avg_dt_ms": 1e3 * s["avg_dt_s"], "min_dt_ms": 1e3 * s["min_dt_s"], "max_dt_ms": 1e3 * s["max_dt_s"],
-            "avg_active_pct": 100 * s["avg_active_fraction"], "max_density_error_pct": 100 * s["max_density_error"],
-            "front_t_s": " ".join(f"{f['t']:.2f}" for f in s.get("front_x_m_at", [])),
-            "front_x_m": " ".join(f"{x:.3f}" for x in sf), "front_dev_vs_global_pct": 100 * dev,
-            "collisions": s["boundary_collisions_total"],
-            "speedup_vs_global": med["global"][0] / wall,
-            "speedup_vs_global_cpu": med["global"][1] / cpu,
-            "speedup_vs_constant": med["constant"][0] / wall if "constant" in med else float("nan"),
-        })
-    system_tables.append((scale, order, {sy: {n: statistics.median(v) for n, v in c.items()} for sy, c in per_step.items()}))
+            record(name, run(name, scale, sets, rep))
 
-machine = f"{os.cpu_count()} cores, {platform.processor() or platform.machine()}"
-lines = [f"`{pathlib.Path(args.scene).name}`, {args.threads} threads, {machine}, "
-         f"{time.strftime('%Y-%m-%d')}; runs one after another, no frames written; "
-         f"{args.repeat} run(s) per configuration, interleaved, median times; front deviation is the largest "
-         f"|x - x_global| / x_global over the three times.", "",
-         "| mode | particles | simulated s | wall s | CPU s | steps | avg Δt_sim ms (min–max) | avg active | "
-         "max ρ error | front x m at t s | front vs global | net catches | speed-up vs global: wall, CPU (wall vs constant) |",
-         "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
-for r in rows:
-    lines.append(f"| {r['mode']} | {r['particles']:,} | {r['simulated_s']:.2f} | {r['wall_s']:.1f} | {r['cpu_s']:.1f} | {r['steps']:,} | "
-                 f"{r['avg_dt_ms']:.3f} ({r['min_dt_ms']:.3f}–{r['max_dt_ms']:.3f}) | {r['avg_active_pct']:.0f} % | "
-                 f"{r['max_density_error_pct']:.1f} % | {r['front_x_m']} at {r['front_t_s']} | {r['front_dev_vs_global_pct']:.1f} % | {r['collisions']} | "
-                 f"{r['speedup_vs_global']:.2f}, {r['speedup_vs_global_cpu']:.2f} ({r['speedup_vs_constant']:.2f}) |")
-# Where a step's time goes: each system's wall time per step from summary.json (median over the
-# runs of a configuration); a system a configuration does not build shows a dash.
-for scale, order, table in system_tables:
-    lines += ["", f"Milliseconds per step by system (scale {scale:g}; median over the runs; `step` is their sum):", "",
-              "| system | " + " | ".join(order) + " |", "|---|" + "---|" * len(order)]
-    for sy, by in table.items():
-        lines.append(f"| {sy} | " + " | ".join(f"{by[n]:.2f}" if n in by else "–" for n in order) + " |")
-    lines.append("| **step** | " + " | ".join(f"**{sum(by.get(n, 0.0) for by in table.values()):.2f}**" for n in order) + " |")
-text = "\n".join(lines) + "\n"
+text = write_tables(sizes)
 print(text)
-out_root.mkdir(parents=True, exist_ok=True)
-(out_root / "mode_table.md").write_text(text)
-with open(out_root / "mode_table.csv", "w", newline="") as f:
-    w = csv.DictWriter(f, fieldnames=list(rows[0].keys()))
-    w.writeheader()
-    w.writerows(rows)
+bad = [f"scale {scale:g} {name}: {p}" for scale, _, _, problems, _ in sizes for name, ps in problems.items() for p in ps]
+require(not bad, f"{len(bad)} run(s) not usable ({'; '.join(bad)}); {out_root / 'mode_table.md'} and mode_table.csv "
+                 f"have every other figure")

@@ -28,9 +28,18 @@ For every probe with an `experiment` object (scenes/README.md) it writes, per re
 
 Outputs in --out: resolution.md, resolution.csv, resolution.png (error against spacing and
 the mean curves against the data), and every run's folder f<f>/run<k>/.
+
+When and failures. resolution.md and resolution.csv are rewritten after every run (into a
+temporary file in --out, then renamed onto the table: never half-written), so an interrupted or
+crashed study keeps the figures of the runs it finished; a resolution whose runs are not all done
+yet has the status "k of N runs run so far". resolution.png is drawn at the end. A run sph-run
+reports failed ("failed (exit N)"), or whose summary.json or probe files cannot be read
+("unreadable: <file>: <reason>"), is left out of its resolution's figures and named in the row's
+`status` (CSV) and under the table; a resolution with no usable run is a row with only that
+status. Exit codes: 0 every run usable; 2 bad arguments, before any run, or, after writing the
+tables, a run failed or unreadable (one line, `resolution_study: error: ...`); 130 interrupted.
 """
 import argparse
-import csv
 import datetime
 import json
 import pathlib
@@ -38,7 +47,8 @@ import subprocess
 import sys
 import time
 
-from sph_python import errors_as_exit_2, need  # noqa: E402 (tools/ is the script's folder)
+from sph_python import Unreadable, csv_text, errors_as_exit_2, need, read_json_object, \
+    write_atomic  # noqa: E402 (tools/ is the script's folder)
 errors_as_exit_2()
 
 need("numpy")
@@ -62,7 +72,8 @@ def parse_perturb(spec):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter,
+                                 epilog=next(p for p in __doc__.split("\n\n") if p.startswith("When and failures.")))
     ap.add_argument("scene")
     ap.add_argument("--refine", default="0.5,0.75,1,1.5",
                     help="linear refinement factors; spacing = scene spacing / f (default 0.5,0.75,1,1.5)")
@@ -116,10 +127,11 @@ def main():
         fail(f"{sph_run}: not found (build the project first, or pass --sph-run)")
 
     started = time.time()
-    runs = {}  # factor -> list of (run dir, summary)
+    runs = {}      # factor -> [(run dir, summary, {probe name: experiment_series(...)})] of the usable runs
+    problems = {}  # factor -> ["run<k>: failed (exit N)" or "run<k>: unreadable: <file>: <reason>"]
     total = len(factors) * len(values)
     for fi, f in enumerate(factors):
-        runs[f] = []
+        runs[f], problems[f] = [], []
         for k, v in enumerate(values):
             d = out / f"f{f:g}" / f"run{k}"
             cmd = [str(sph_run), str(scene_path), "--scale", repr(base_scale * f ** 3), "--threads",
@@ -137,13 +149,48 @@ def main():
                   end=" ", flush=True)
             t0 = time.time()
             r = subprocess.run(cmd, capture_output=True, text=True)
+            problem = None
             if r.returncode != 0:
-                fail(f"run failed ({' '.join(cmd)}):\n{r.stderr.strip()}")
-            summary = json.loads((d / "summary.json").read_text())
-            print(f"{summary['fluid_particles']:,} particles, {summary['kept_steps']:,} steps, "
-                  f"{time.time() - t0:.1f} s", flush=True)
-            runs[f].append((d, summary))
+                problem = f"failed (exit {r.returncode})"
+                print(f"{problem}: {' '.join(cmd)}\n{r.stderr.strip()}", flush=True)
+            else:
+                try:
+                    summary = read_json_object(d / "summary.json",
+                                               numbers=("fluid_particles", "kept_steps", "physics.particle_radius"))
+                    series = {p["name"]: experiment_series(d, p, scene_path.parent) for p in probes}
+                except Unreadable as e:
+                    problem = f"unreadable: {e}"
+                    print(problem, flush=True)
+            if problem:
+                problems[f].append(f"run{k}: {problem}")
+            else:
+                print(f"{summary['fluid_particles']:,} particles, {summary['kept_steps']:,} steps, "
+                      f"{time.time() - t0:.1f} s", flush=True)
+                runs[f].append((d, summary, series))
+            rows, curves = tabulate(probes, factors, runs, problems, args)
+            write_tables(out, rows, probes, scene_path, args, key, lo, hi, started)
 
+    rows, curves = tabulate(probes, factors, runs, problems, args)
+    text = write_tables(out, rows, probes, scene_path, args, key, lo, hi, started)
+    print(text)
+    wrote = [out / "resolution.md", out / "resolution.csv"]
+    if any(runs.values()):
+        plot(out / "resolution.png", probes, factors, rows, curves, runs, scene_path)
+        wrote.append(out / "resolution.png")
+    print("wrote " + ", ".join(str(w) for w in wrote))
+    bad = [f"refine {f:g} {p}" for f in factors for p in problems[f]]
+    if bad:
+        fail(f"{len(bad)} of {total} runs not usable ({'; '.join(bad)}); {out / 'resolution.csv'} and "
+             f"resolution.md have the figures of the others")
+
+
+COLUMNS = ["probe", "refine", "spacing_m", "length_per_spacing", "particles", "runs", "steps_median", "err_median",
+           "err_min", "err_max", "mean_err", "mean_shift", "free_err", "free_shift", "scatter", "change", "max_shift",
+           "max_abs_median", "max_abs_min", "max_abs_max", "status"]
+
+
+def tabulate(probes, factors, runs, problems, args):
+    """Rows (per probe and resolution begun) and curves of the usable runs so far."""
     rows = []
     curves = {}  # (probe, factor) -> (T grid, mean Z, per-run errors against the experiment)
     for p in probes:
@@ -152,7 +199,18 @@ def main():
         max_shift = e.get("max_shift", 0.0)
         prev = None
         for f in factors:
-            series = [experiment_series(d, p, scene_path.parent) for d, _ in runs[f]]
+            if f not in runs:
+                break  # not begun
+            tried = len(runs[f]) + len(problems[f])
+            parts = [] if tried == args.runs else [f"{tried} of {args.runs} runs run so far"]
+            if problems[f]:
+                parts.append(f"{len(runs[f])} of {tried} runs usable; " + "; ".join(problems[f]))
+            status = "; ".join(parts) or "ok"
+            if not runs[f]:
+                rows.append({"probe": p["name"], "refine": f, "runs": 0, "status": status})
+                prev = None  # no change "from the next coarser" across a missing resolution
+                continue
+            series = [sr[p["name"]] for _, _, sr in runs[f]]
             te, ze = series[0][2], series[0][3]
             t_end = min(s[0][-1] for s in series)
             grid = np.linspace(max(s[0][0] for s in series), t_end, 2000)
@@ -179,18 +237,19 @@ def main():
                 "probe": p["name"], "refine": f, "spacing_m": spacing,
                 "length_per_spacing": 1 / (spacing * e.get("value_scale", 1.0)),
                 "particles": s0["fluid_particles"], "runs": len(series),
-                "steps_median": float(np.median([s["kept_steps"] for _, s in runs[f]])),
+                "steps_median": float(np.median([s["kept_steps"] for _, s, _ in runs[f]])),
                 "err_median": float(np.median(per_run)), "err_min": min(per_run), "err_max": max(per_run),
                 "mean_err": mean_err, "mean_shift": mean_shift, "free_err": free_err, "free_shift": free_shift,
                 "scatter": scatter, "change": change, "max_shift": max_shift,
                 "max_abs_median": float(np.median(max_abs)), "max_abs_min": min(max_abs), "max_abs_max": max(max_abs),
+                "status": status,
             })
+    return rows, curves
 
-    with open(out / "resolution.csv", "w", newline="") as fcsv:
-        wr = csv.DictWriter(fcsv, fieldnames=list(rows[0].keys()))
-        wr.writeheader()
-        wr.writerows(rows)
 
+def write_tables(out, rows, probes, scene_path, args, key, lo, hi, started):
+    """resolution.csv and resolution.md of the rows so far, each replaced atomically; returns the Markdown."""
+    write_atomic(out / "resolution.csv", csv_text(rows, COLUMNS))
     pct = lambda x: "–" if x != x else f"{100 * x:.2f}"  # noqa: E731 (nan -> dash)
     varied = "".join(f"; `{s}` per refinement" for s in args.vary)
     lines = [f"`{scene_path.name}`{varied}, {args.mode or 'scene mode'}, {args.runs} run(s) per resolution with "
@@ -205,18 +264,22 @@ def main():
                   "mean curve error % (ΔT) | free shift: error % (ΔT) | scatter % | change from coarser % | "
                   "max \\|Δ\\| per run, no shift: median (min–max) |",
                   "|---|---|---|---|---|---|---|---|---|---|"]
-        for r in (r for r in rows if r["probe"] == p["name"]):
+        mine = [r for r in rows if r["probe"] == p["name"]]
+        for r in mine:
+            if not r["runs"]:
+                lines.append(f"| refine {r['refine']:g} | {r['status'].replace('|', chr(92) + '|')} |" + " |" * 8)
+                continue
             lines.append(
                 f"| {1e3 * r['spacing_m']:.3g} mm | {r['length_per_spacing']:.1f} | {r['particles']:,} | "
                 f"{r['steps_median']:,.0f} | {pct(r['err_median'])} ({pct(r['err_min'])}–{pct(r['err_max'])}) | "
                 f"{pct(r['mean_err'])} ({r['mean_shift']:+.3f}) | {pct(r['free_err'])} ({r['free_shift']:+.3f}) | "
                 f"{pct(r['scatter'])} | {pct(r['change'])} | "
                 f"{r['max_abs_median']:.3f} ({r['max_abs_min']:.3f}–{r['max_abs_max']:.3f}) |")
-        lines.append("")
-    (out / "resolution.md").write_text("\n".join(lines))
-    print("\n".join(lines))
-    plot(out / "resolution.png", probes, factors, rows, curves, runs, scene_path)
-    print(f"wrote {out / 'resolution.md'}, {out / 'resolution.csv'}, {out / 'resolution.png'}")
+        notes = [f"* refine {r['refine']:g}: {r['status']}" for r in mine if r["runs"] and r["status"] != "ok"]
+        lines += [""] + notes + ([""] if notes else [])
+    text = "\n".join(lines)
+    write_atomic(out / "resolution.md", text)
+    return text
 
 
 def plot(path, probes, factors, rows, curves, runs, scene_path):
@@ -226,7 +289,7 @@ def plot(path, probes, factors, rows, curves, runs, scene_path):
 
     fig, axes = plt.subplots(len(probes), 2, figsize=(11, 3.6 * len(probes)), squeeze=False)
     for i, p in enumerate(probes):
-        mine = [r for r in rows if r["probe"] == p["name"]]
+        mine = [r for r in rows if r["probe"] == p["name"] and r["runs"]]
         ax = axes[i][0]
         x = [r["length_per_spacing"] for r in mine]
         for r in mine:
@@ -243,11 +306,10 @@ def plot(path, probes, factors, rows, curves, runs, scene_path):
         ax.set_title(f"{p['name']}: error against spacing (grey: single runs)")
         ax.legend(fontsize=8)
         ax = axes[i][1]
-        for f in factors:
-            grid, mean, _ = curves[(p["name"], f)]
-            r = next(r for r in mine if r["refine"] == f)
+        for r in mine:
+            grid, mean, _ = curves[(p["name"], r["refine"])]
             ax.plot(grid, mean, label=f"1/{r['length_per_spacing']:.0f} (mean of {r['runs']})")
-        _, _, te, ze = experiment_series(runs[factors[0]][0][0], p, scene_path.parent)
+        _, _, te, ze = next(sr[p["name"]] for f in factors for _, _, sr in runs[f])
         ax.plot(te, ze, "ko", ms=4, label="experiment")
         ax.set_xlabel("T (dimensionless time)")
         ax.set_ylabel("Z (dimensionless)")

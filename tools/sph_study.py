@@ -23,6 +23,19 @@ parallel, so that wall times compare), and writes into --out:
                         (tools/plot_dt.py: He et al. Fig. 2; Ihmsen et al. Fig. 4).
   <run>/                every run's outputs (stats.csv, summary.json, probes/, run.log).
 
+When. study.md and study.csv are rewritten after every run (into a temporary file in --out, then
+renamed onto the table: never half-written), so a study that is interrupted or crashes leaves the
+rows of every run it finished; until the reference has run their accuracy columns say "pending".
+pareto.png and dt.png are drawn at the end.
+
+Failures. A run sph-run reports failed is a "failed" row; a run whose summary.json, stats.csv or
+probe files cannot be read (missing, truncated, not JSON or CSV) is a row "unreadable: <file>:
+<reason>". If the reference run fails or cannot be read, every row keeps its cost columns, the
+accuracy columns say "unavailable: <reason>" and there is no pareto.png. Exit codes: 0 the tables
+are complete ("failed" rows included); 2 bad arguments, before any run, or, after writing the
+tables, a run or the reference unreadable or the reference failed (one line, `sph-study: error:
+...`); 130 interrupted (Ctrl-C), the tables holding the runs finished before.
+
 Configurations. By default every `method mode` pair the scene loads with (sph-run
 --list-modes), so a mode added to the engine joins the study with no change here; --config adds
 more (MODE is `mode` or `method/mode`; --set keys may drop the leading `simulation.`, e.g.
@@ -44,7 +57,6 @@ columns (after '#' comment lines and a header); RMS relative error over t_range,
 one time shift |dT| <= max_shift (a lab gate does not open instantly).
 """
 import argparse
-import csv
 import datetime
 import json
 import math
@@ -60,7 +72,8 @@ import time
 # sph_python.py sits beside this file (tools/, or build/tools/ beside sph-study); put that folder
 # first on the path so that loading this file as a module (tools that import it, the tests) finds it too.
 sys.path.insert(0, os.path.dirname(os.path.realpath(__file__)))
-from sph_python import need  # noqa: E402
+from sph_python import Unreadable, csv_text, errors_as_exit_2, need, read_csv_columns, read_json_object, reading, \
+    write_atomic  # noqa: E402
 import stepping_bound  # noqa: E402
 
 need("numpy")
@@ -115,20 +128,15 @@ def parse_config(spec):
     return {"label": label, "method": method, "mode": mode, "sets": sets}
 
 
-def read_csv(path):
-    """Numeric CSV with a header; '#' lines skipped. Returns {column: np.array}."""
-    rows, header = [], None
-    with open(path) as f:
-        for line in f:
-            if not line.strip() or line.startswith("#"):
-                continue
-            cells = line.strip().split(",")
-            if header is None:
-                header = cells
-                continue
-            rows.append([float(c) for c in cells])
-    data = np.array(rows, dtype=float).reshape(-1, len(header))
-    return {h: data[:, i] for i, h in enumerate(header)}
+def read_csv(path, columns=(), min_rows=0):
+    """Numeric CSV with a header; '#' lines skipped. Returns {column: np.array}; OSError, or
+    ValueError naming the line, as sph_python.read_csv_columns (a truncated row, a missing column)."""
+    return {h: np.array(v, dtype=float) for h, v in read_csv_columns(path, columns, min_rows).items()}
+
+
+# What the tables read from a run's summary.json: a summary without one of them is unreadable.
+SUMMARY_NUMBERS = ("steps", "wall_time_s", "fluid_particles", "simulated_time_s", "avg_dt_s", "min_dt_s",
+                   "max_dt_s", "avg_active_fraction", "max_density_error")
 
 
 def machine():
@@ -183,6 +191,11 @@ class Study:
             self.probes = self.scene_json["probes"]
         for i, probe in enumerate(self.probes):  # the engine's default name, <type>_<index>
             probe.setdefault("name", f"{probe.get('type')}_{i}")
+        self.configs, self.results, self.problems, self.done = [], [], [], []
+        self.ref_summary = self.ref_series = None
+        self.ref_note = "pending: the reference runs after the configurations"  # None once it is read
+        self.started = datetime.datetime.now()
+        self.context = f"{args.threads} threads, {machine()}, {self.started:%Y-%m-%d %H:%M}, engine {source_commit()}"
 
     def sph_run(self, extra, out_dir, label, index, total):
         cmd = [self.a.sph_run, str(self.scene_path), "--threads", str(self.a.threads), "--out", str(out_dir)]
@@ -203,12 +216,17 @@ class Study:
         cpu = (cpu1.ru_utime - cpu0.ru_utime) + (cpu1.ru_stime - cpu0.ru_stime)
         if rc != 0:
             print(f"    {label}: FAILED (exit {rc}); see {out_dir / 'run.log'}", flush=True)
-            return None
-        s = json.loads((out_dir / "summary.json").read_text())
+            return None, f"failed (exit {rc})"
+        try:
+            s = read_json_object(out_dir / "summary.json", numbers=SUMMARY_NUMBERS)
+        except Unreadable as e:
+            print(f"    {label}: UNREADABLE: {e}", flush=True)
+            return None, f"unreadable: {e}"
         s["_cpu_s"] = cpu  # whole process, set-up included: less sensitive than wall time to a shared machine
+        s["_dir"] = str(out_dir)
         print(f"    {label}: {s['steps']} steps, {s['wall_time_s']:.1f} s wall ({time.time() - t0:.1f} s with set-up)",
               flush=True)
-        return s
+        return s, None
 
     def list_modes(self):
         """The "method mode" pairs the scene loads with (asked of sph-run once, then kept)."""
@@ -237,11 +255,176 @@ class Study:
     def scene_method(self):
         return self.scene_json.get("simulation", {}).get("method", "wcsph")
 
+    def own_figures(self, r):
+        """A finished run's figures that need no other run: cost, experiment error, the
+        sound-crossing bound, the standing wave, and its series for the deviation from the
+        reference. Unreadable if its stats.csv or a probe file is missing or cannot be parsed."""
+        d = pathlib.Path(r["_dir"])
+        with reading(d / "stats.csv"):
+            stats = read_csv(d / "stats.csv", columns=("dt", "rho_err_avg"), min_rows=1)
+        dt = stats["dt"]
+        cost = {
+            "status": "ok", "particles": r["fluid_particles"], "simulated_s": r["simulated_time_s"],
+            "wall_s": r["wall_time_s"], "cpu_s": r["_cpu_s"], "steps": r["steps"], "avg_dt_ms": 1e3 * r["avg_dt_s"],
+            "min_dt_ms": 1e3 * r["min_dt_s"], "max_dt_ms": 1e3 * r["max_dt_s"],
+            "avg_active_pct": 100 * r["avg_active_fraction"],
+            "speedup_vs_global": None, "speedup_vs_constant": None,  # set when the table is written
+            # time average over the run (each step weighted by its dt), and the maximum
+            "avg_density_error_pct": 100 * float(np.sum(stats["rho_err_avg"] * dt) / np.sum(dt)),
+            "max_density_error_pct": 100 * r["max_density_error"],
+            # the safety net's corrections over the run, and those of particles with no fluid
+            # neighbour (lone droplets, whose wall contact the net is by design; WCSPH only)
+            "net_catches": r.get("boundary_collisions_total", 0),
+            "droplet_contacts": r.get("droplet_contacts_total"),
+        }
+        series = primary_series(d, self.probes, strict=True)
+        after = {}
+        scene_dir = self.scene.resolve().parent
+        for p in (p for p in self.probes if "experiment" in p):
+            err, shift, at_bound = experiment_error(d, p, scene_dir)
+            after[f"exp err {p['name']} %"] = 100 * err
+            after[f"exp shift {p['name']}"] = shift
+            after[f"exp shift at bound {p['name']}"] = at_bound
+        # What per-particle stepping could at most gain over this run at its lambda_c
+        # (tools/stepping_bound.py): WCSPH with the acoustic condition only.
+        try:
+            b = stepping_bound.bound(d)
+            after["evaluations per particle"] = b["evaluations_per_particle"]
+            after["evaluations per particle at the sound-crossing bound"] = b["bound_evaluations_per_particle"]
+            after["evaluations / sound-crossing bound"] = b["ratio"]
+        except stepping_bound.BadInput:
+            pass
+        wave = wave_figures(d, self.fluid_probe, r, self.scene_json)
+        if wave:
+            after["wave period s"] = wave["period_s"]
+            after["wave period err %"] = 100 * (wave["period_s"] / wave["period_theory_s"] - 1)
+            after["wave decay 1/s"] = wave["decay_per_s"]
+            after["wave decay / theory"] = wave["decay_per_s"] / wave["decay_theory_per_s"] \
+                if wave["decay_theory_per_s"] > 0 else float("nan")
+            after["wave theory"] = f"T {wave['period_theory_s']:.4f} s, decay {wave['decay_theory_per_s']:.4g} 1/s"
+        return {"cost": cost, "series": series, "after": after}
+
+    def rows(self):
+        """One row per configuration run so far, in the configurations' order."""
+        def wall_of(mode):
+            for r, c in zip(self.results, self.configs):
+                if r and c["mode"] == mode and not c["sets"] and c["method"] == self.scene_method():
+                    return r["wall_time_s"]
+            return None
+
+        w_global, w_constant = wall_of("global"), wall_of("constant")
+        rows = []
+        for c, r, problem, done in zip(self.configs, self.results, self.problems, self.done):
+            if not done:
+                continue
+            row = {"configuration": c["label"], "method": c["method"], "mode": c["mode"]}
+            if not r:
+                row["status"] = "failed" if problem.startswith("failed") else problem
+                rows.append(row)
+                continue
+            row.update(r["_own"]["cost"])
+            row["speedup_vs_global"] = w_global / r["wall_time_s"] if w_global else float("nan")
+            row["speedup_vs_constant"] = w_constant / r["wall_time_s"] if w_constant else float("nan")
+            if self.ref_series is not None:
+                mine, rel = r["_own"]["series"], []
+                for name, series in self.ref_series.items():
+                    if name in mine:
+                        rms, relative = deviation(mine[name], series)
+                        row[f"dev {name} ({series[2]})"] = rms
+                        rel.append(relative)
+                # Over the series whose reference varies (a flat reference has no range to divide by).
+                rel = [x for x in rel if np.isfinite(x)]
+                row["deviation (mean rel.)"] = float(np.mean(rel)) if rel else float("nan")
+            else:  # pending or unavailable: every series the reference would give, saying why not
+                for i, p in enumerate(self.probes):
+                    name, _, unit = series_of(p, i)
+                    row[f"dev {name} ({unit})"] = self.ref_note
+                row["deviation (mean rel.)"] = self.ref_note
+            row.update(r["_own"]["after"])
+            rows.append(row)
+        return rows
+
+    def write_tables(self):
+        """study.csv and study.md of the runs so far, each replaced atomically; returns (rows, md text)."""
+        rows = self.rows()
+        columns = []
+        for row in rows:
+            for k in row:
+                if k not in columns:
+                    columns.append(k)
+        write_atomic(self.out / "study.csv", csv_text(rows, columns))
+        text = self.markdown(rows, columns)
+        write_atomic(self.out / "study.md", text)
+        return rows, text
+
+    def markdown(self, rows, columns):
+        dev_cols = [k for k in columns if k.startswith("dev ")]
+        exp_cols = [k for k in columns if k.startswith("exp err ")]
+        if self.ref_note is None:
+            s = self.ref_summary
+            ref = (f"Reference: constant, Δt = {1e3 * s['avg_dt_s']:.4g} ms, {s['steps']:,} steps, "
+                   f"{s['wall_time_s']:.1f} s wall.")
+        else:
+            ref = f"Reference: {self.ref_note}."
+        left = sum(not d for d in self.done)
+        head = (f"`{self.scene.name}` ({self.configs and self.scene_method()}), {self.context}; runs one after another, "
+                f"no frames. {ref}" + (f" Partial: {left} of {len(self.configs)} configurations still to run." if left else ""))
+        hdr = ["configuration", "particles", "sim s", "wall s", "CPU s", "steps", "Δt ms avg (min–max)", "active %",
+               "speed-up vs global", "vs constant", "ρ err avg / max %", "net catches (droplets)"] + \
+              [k.replace("dev ", "RMS dev ") for k in dev_cols] + ["dev (mean rel.)"] + \
+              [k.replace("exp err ", "exp. err ") + " (ΔT)" for k in exp_cols]
+        wave_cols = "wave period s" in columns
+        if wave_cols:
+            hdr += ["wave period s (err %)", "decay 1/s (× theory)"]
+        lines = [head, "", "| " + " | ".join(hdr) + " |", "|" + "---|" * len(hdr)]
+
+        def acc(x):  # an accuracy cell: a number, or "pending"/"unavailable" (the reason is in the head line)
+            return x.split(":")[0] if isinstance(x, str) else fmt(x)
+
+        for row in rows:
+            if row["status"] != "ok":
+                what = "failed (see its run.log)" if row["status"] == "failed" else row["status"].replace("|", "\\|")
+                lines.append(f"| {row['configuration']} | {what} |" + " |" * (len(hdr) - 2))
+                continue
+            cells = [row["configuration"], f"{row['particles']:,}", f"{row['simulated_s']:.3g}", f"{row['wall_s']:.1f}",
+                     f"{row['cpu_s']:.1f}", f"{row['steps']:,}", f"{row['avg_dt_ms']:.3g} ({row['min_dt_ms']:.3g}–{row['max_dt_ms']:.3g})",
+                     f"{row['avg_active_pct']:.0f}", fmt(row["speedup_vs_global"]), fmt(row["speedup_vs_constant"]),
+                     f"{row['avg_density_error_pct']:.2f} / {row['max_density_error_pct']:.1f}",
+                     f"{row['net_catches']:,}" + (f" ({row['droplet_contacts']:,})" if row["droplet_contacts"] is not None else "")]
+            cells += [acc(row.get(k)) for k in dev_cols] + [acc(row["deviation (mean rel.)"])]
+            cells += [f"{row[k]:.1f} ({row[k.replace('exp err ', 'exp shift ').replace(' %', '')]:+.2f}"
+                      + ("*" if row.get(k.replace("exp err ", "exp shift at bound ").replace(" %", "")) else "") + ")"
+                      for k in exp_cols]
+            if wave_cols:
+                cells += [f"{row['wave period s']:.4f} ({row['wave period err %']:+.2f})" if "wave period s" in row else "",
+                          f"{row['wave decay 1/s']:.4f} ({row['wave decay / theory']:.2f})" if "wave period s" in row else ""]
+            lines.append("| " + " | ".join(cells) + " |")
+        notes = [f"* {c['label']}: {c['note']}" for c in self.configs if c.get("note")]
+        if any(v is True for row in rows for k, v in row.items() if k.startswith("exp shift at bound ")):
+            notes.append("* ΔT marked * is the first or last shift the search could try (±max_shift, or where the run "
+                         "ends): a better fit may lie beyond it, with a wider `max_shift` or a longer run.")
+        for row in rows:
+            if row["status"] == "ok" and row["mode"] in ("global", "constant") and \
+                    "evaluations / sound-crossing bound" in row:
+                notes.append(f"* {row['configuration']}: per-particle stepping at the same λc could evaluate at most "
+                             f"{row['evaluations / sound-crossing bound']:.2f}× less than this run (its "
+                             f"{row['evaluations per particle']:,.0f} evaluations per particle against "
+                             f"{row['evaluations per particle at the sound-crossing bound']:,.0f} at the sound-crossing "
+                             f"bound; tools/stepping_bound.py)")
+        theory = next((row["wave theory"] for row in rows if "wave theory" in row), None)
+        if theory:
+            notes.append(f"* standing wave, linear theory: {theory} (ν of the first run; each row's ratio uses its own); measured from the fluid "
+                         f"probe's centre_x after the wave is given")
+        return "\n".join(lines + ([""] + notes if notes else [])) + "\n"
+
     def run(self):
-        configs = self.configurations()
+        """Every configuration, then the reference; the tables are rewritten after each run."""
+        configs = self.configs = self.configurations()
         # Adaptive runs first: a `constant` configuration takes its step from them.
         order = sorted(range(len(configs)), key=lambda k: configs[k]["mode"] == "constant")
-        results = [None] * len(configs)
+        results = self.results = [None] * len(configs)
+        self.problems = [None] * len(configs)  # "failed (exit N)", "unreadable: ..." or None
+        self.done = [False] * len(configs)
         total = len(configs) + (0 if self.a.reference else 1)
         for n, k in enumerate(order, 1):
             c = configs[k]
@@ -259,53 +442,79 @@ class Study:
                     c["note"] = (f"dt = {dt * 1e3:.4g} ms, the smallest step of the "
                                  f"{'global' if glob else 'adaptive'} run")
             slug = "".join(ch if ch.isalnum() or ch in "._-" else "_" for ch in c["label"])
-            results[k] = self.sph_run(sets, self.out / f"{n:02d}_{slug}", c["label"], n, total)
-            if results[k]:
-                results[k]["_dir"] = str(self.out / f"{n:02d}_{slug}")
-        ref_dir = self.reference(configs, results, total)
-        return configs, results, ref_dir
+            r, problem = self.sph_run(sets, self.out / f"{n:02d}_{slug}", c["label"], n, total)
+            if r:
+                try:  # the run's own figures, read now: a file it lacks makes its row, not the study, fail
+                    r["_own"] = self.own_figures(r)
+                except Unreadable as e:
+                    print(f"    {c['label']}: UNREADABLE: {e}", flush=True)
+                    r, problem = None, f"unreadable: {e}"
+            results[k], self.problems[k], self.done[k] = r, problem, True
+            self.write_tables()
+        self.reference(total)
+        self.write_tables()
 
-    def reference(self, configs, results, total):
+    def load_reference(self, d, what, strict):
+        """Reads the reference's summary and series; returns None, or the reason they are
+        unavailable. `strict`: a run of this scene, whose every probe file must be there."""
+        try:
+            summary = read_json_object(d / "summary.json", numbers=("avg_dt_s", "steps", "wall_time_s"))
+            series = primary_series(d, self.probes, strict)
+        except Unreadable as e:
+            return f"{what} cannot be read: {e}"
+        self.ref_summary, self.ref_series = summary, series
+        return None
+
+    def reference(self, total):
+        """Sets self.ref_series and ref_summary, or self.ref_note to why they are unavailable."""
         if self.a.reference:
-            d = pathlib.Path(self.a.reference)
-            if not (d / "summary.json").is_file():
-                fail(f"--reference {d}: no summary.json there")
-            return d
+            return  # loaded (and checked) before the first run
         dt = self.a.reference_dt
         if dt is None:
-            glob = [r for r, c in zip(results, configs) if r and c["mode"] == "global" and not c["sets"]]
-            pool = glob or [r for r in results if r]
+            glob = [r for r, c in zip(self.results, self.configs) if r and c["mode"] == "global" and not c["sets"]]
+            pool = glob or [r for r in self.results if r]
             if not pool:
-                fail("every run failed: no step to derive the reference's from (give --reference-dt)")
+                self.ref_note = ("unavailable: no run finished, so no step to derive the reference's from "
+                                 "(give --reference-dt)")
+                return
             dt = 0.5 * min(r["min_dt_s"] for r in pool)
         d = self.out / "reference"
-        s = self.sph_run([f"simulation.method={self.scene_method()}", "simulation.stepping.mode=constant",
-                          f"simulation.stepping.dt={dt!r}"], d, f"reference (constant, dt = {dt * 1e3:.4g} ms)",
-                         total, total)
-        if s is None:
-            fail("the reference run failed")
-        return d
+        s, problem = self.sph_run([f"simulation.method={self.scene_method()}", "simulation.stepping.mode=constant",
+                                   f"simulation.stepping.dt={dt!r}"], d, f"reference (constant, dt = {dt * 1e3:.4g} ms)",
+                                  total, total)
+        if problem:
+            self.ref_note = (f"unavailable: the reference run {problem}, see {d / 'run.log'}" if problem.startswith("failed")
+                             else f"unavailable: the reference run's output is {problem}")
+            return
+        why = self.load_reference(d, "the reference run's output", strict=True)
+        self.ref_note = f"unavailable: {why}" if why else None
 
 
 # ---- accuracy ----
 
-def primary_series(run_dir, probes):
-    """{series name: (t, values, unit)}: each probe's primary column, and the kinetic energy."""
+def series_of(probe, i):
+    """(series name, column, unit) of a probe's primary column; a fluid probe's is the kinetic energy."""
+    name = probe.get("name", f"{probe['type']}_{i}")
+    return {"fluid": ("kinetic energy", "kinetic", "J"), "pressure": (name, "p", "Pa"),
+            "height": (name, "height", "m")}.get(probe["type"], (name, "front", "m"))
+
+
+def primary_series(run_dir, probes, strict=False):
+    """{series name: (t, values, unit)}: each probe's primary column, and the kinetic energy.
+    A probe file that is not there is left out, or with `strict` (a run of this scene, which
+    writes every probe) Unreadable; one that cannot be parsed is Unreadable."""
     out = {}
     for i, p in enumerate(probes):
+        key, col, unit = series_of(p, i)
         name = p.get("name", f"{p['type']}_{i}")
         f = pathlib.Path(run_dir) / "probes" / f"{name}.csv"
         if not f.is_file():
+            if strict:
+                raise Unreadable(f"{f}: no such file (the run was to write every probe of the scene)")
             continue
-        d = read_csv(f)
-        if p["type"] == "fluid":
-            out["kinetic energy"] = (d["t"], d["kinetic"], "J")
-        elif p["type"] == "pressure":
-            out[name] = (d["t"], d["p"], "Pa")
-        elif p["type"] == "height":
-            out[name] = (d["t"], d["height"], "m")
-        else:
-            out[name] = (d["t"], d["front"], "m")
+        with reading(f):
+            d = read_csv(f, columns=("t", col), min_rows=1)
+        out[key] = (d["t"], d[col], unit)
     return out
 
 
@@ -323,13 +532,16 @@ def deviation(run, ref):
 
 def experiment_series(run_dir, probe, scene_dir):
     """A probe with an `experiment` object, made dimensionless as the experiment is: returns
-    (T, Z) of the run and (te, ze) of the measured data."""
+    (T, Z) of the run and (te, ze) of the measured data. A file that cannot be read is Unreadable."""
     e = probe["experiment"]
-    d = read_csv(pathlib.Path(run_dir) / "probes" / f"{probe.get('name')}.csv")
-    col = {"fluid": "kinetic", "pressure": "p", "height": "height"}.get(probe["type"], "front")
+    f = pathlib.Path(run_dir) / "probes" / f"{probe.get('name')}.csv"
+    col = series_of(probe, 0)[1]
+    with reading(f):
+        d = read_csv(f, columns=("t", col), min_rows=1)
     T = d["t"] * e.get("t_scale", 1.0)
     Z = (d[col] - e.get("value_offset", 0.0)) * e.get("value_scale", 1.0)
-    x = read_csv(scene_dir / e["file"])
+    with reading(scene_dir / e["file"]):
+        x = read_csv(scene_dir / e["file"])
     keys = [k for k in x.keys() if k not in ("a_in",)]
     return T, Z, x[keys[0]], x[keys[1]]
 
@@ -386,8 +598,9 @@ def wave_figures(run_dir, fluid_probe, summary, scene_json):
     f = pathlib.Path(run_dir) / "probes" / f"{fluid_probe}.csv"
     if not wave or wave["mode"] % 2 == 0 or not f.is_file():
         return None
-    d = read_csv(f)
-    if "centre_x" not in d:
+    with reading(f):
+        d = read_csv(f)
+    if "centre_x" not in d or not (d["t"] > wave["at"]).any():  # no column, or the run ends before the wave
         return None
     t, x = d["t"], d["centre_x"]
     at = wave["at"]
@@ -473,9 +686,10 @@ def main():
     if args.reference:  # checked before any run, not after all of them
         ref_summary = pathlib.Path(args.reference) / "summary.json"
         try:
-            json.loads(ref_summary.read_text())
-        except (OSError, ValueError) as e:
-            fail(f"--reference {args.reference}: no readable summary.json there ({getattr(e, 'strerror', None) or e})")
+            read_json_object(ref_summary, numbers=("avg_dt_s", "steps", "wall_time_s"))
+        except Unreadable as e:
+            fail(f"--reference {args.reference}: no readable summary.json there ({e})")
+    errors_as_exit_2()  # an output that cannot be written: one line, exit 2; Ctrl-C: exit 130
     study = Study(args)
     try:
         study.out.mkdir(parents=True, exist_ok=True)
@@ -502,165 +716,43 @@ def main():
                 raise ValueError("expected a header and at least one row of two or more columns")
         except (OSError, ValueError) as e:
             fail(f"{study.scene}: probe '{probe.get('name')}': experiment file {where}: {getattr(e, 'strerror', None) or e}")
-    started = datetime.datetime.now()
-    configs, results, ref_dir = study.run()
-    ref = primary_series(ref_dir, study.probes)
-    ref_summary = json.loads((ref_dir / "summary.json").read_text())
-    scene_dir = study.scene.resolve().parent
-    exp_probes = [p for p in study.probes if "experiment" in p]
-
-    def wall_of(mode):
-        for r, c in zip(results, configs):
-            if r and c["mode"] == mode and not c["sets"] and c["method"] == study.scene_method():
-                return r["wall_time_s"]
-        return None
-
-    w_global, w_constant = wall_of("global"), wall_of("constant")
-    rows = []
-    for c, r in zip(configs, results):
-        row = {"configuration": c["label"], "method": c["method"], "mode": c["mode"]}
-        if not r:
-            row["status"] = "failed"
-            rows.append(row)
-            continue
-        stats = read_csv(pathlib.Path(r["_dir"]) / "stats.csv")
-        dt = stats["dt"]
-        row.update({
-            "status": "ok", "particles": r["fluid_particles"], "simulated_s": r["simulated_time_s"],
-            "wall_s": r["wall_time_s"], "cpu_s": r["_cpu_s"], "steps": r["steps"], "avg_dt_ms": 1e3 * r["avg_dt_s"],
-            "min_dt_ms": 1e3 * r["min_dt_s"], "max_dt_ms": 1e3 * r["max_dt_s"],
-            "avg_active_pct": 100 * r["avg_active_fraction"],
-            "speedup_vs_global": w_global / r["wall_time_s"] if w_global else float("nan"),
-            "speedup_vs_constant": w_constant / r["wall_time_s"] if w_constant else float("nan"),
-            # time average over the run (each step weighted by its dt), and the maximum
-            "avg_density_error_pct": 100 * float(np.sum(stats["rho_err_avg"] * dt) / np.sum(dt)),
-            "max_density_error_pct": 100 * r["max_density_error"],
-            # the safety net's corrections over the run, and those of particles with no fluid
-            # neighbour (lone droplets, whose wall contact the net is by design; WCSPH only)
-            "net_catches": r.get("boundary_collisions_total", 0),
-            "droplet_contacts": r.get("droplet_contacts_total"),
-        })
-        mine = primary_series(r["_dir"], study.probes)
-        rel = []
-        for name, series in ref.items():
-            if name in mine:
-                rms, relative = deviation(mine[name], series)
-                row[f"dev {name} ({series[2]})"] = rms
-                rel.append(relative)
-        # Over the series whose reference varies (a flat reference has no range to divide by).
-        rel = [x for x in rel if np.isfinite(x)]
-        row["deviation (mean rel.)"] = float(np.mean(rel)) if rel else float("nan")
-        for p in exp_probes:
-            err, shift, at_bound = experiment_error(r["_dir"], p, scene_dir)
-            row[f"exp err {p['name']} %"] = 100 * err
-            row[f"exp shift {p['name']}"] = shift
-            row[f"exp shift at bound {p['name']}"] = at_bound
-        # What per-particle stepping could at most gain over this run at its lambda_c
-        # (tools/stepping_bound.py): WCSPH with the acoustic condition only.
-        try:
-            b = stepping_bound.bound(r["_dir"])
-            row["evaluations per particle"] = b["evaluations_per_particle"]
-            row["evaluations per particle at the sound-crossing bound"] = b["bound_evaluations_per_particle"]
-            row["evaluations / sound-crossing bound"] = b["ratio"]
-        except stepping_bound.BadInput:
-            pass
-        wave = wave_figures(r["_dir"], study.fluid_probe, r, study.scene_json)
-        if wave:
-            row["wave period s"] = wave["period_s"]
-            row["wave period err %"] = 100 * (wave["period_s"] / wave["period_theory_s"] - 1)
-            row["wave decay 1/s"] = wave["decay_per_s"]
-            row["wave decay / theory"] = wave["decay_per_s"] / wave["decay_theory_per_s"] \
-                if wave["decay_theory_per_s"] > 0 else float("nan")
-            row["wave theory"] = f"T {wave['period_theory_s']:.4f} s, decay {wave['decay_theory_per_s']:.4g} 1/s"
-        rows.append(row)
-
-    # ---- tables ----
-    study.out.mkdir(parents=True, exist_ok=True)
-    columns = []
-    for row in rows:
-        for k in row:
-            if k not in columns:
-                columns.append(k)
-    with open(study.out / "study.csv", "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=columns)
-        w.writeheader()
-        w.writerows(rows)
-
-    dev_cols = [k for k in columns if k.startswith("dev ")]
-    exp_cols = [k for k in columns if k.startswith("exp err ")]
-    head = (f"`{study.scene.name}` ({configs and study.scene_method()}), {args.threads} threads, {machine()}, "
-            f"{started.strftime('%Y-%m-%d %H:%M')}, engine {source_commit()}; runs one after another, no frames. "
-            f"Reference: constant, Δt = {1e3 * ref_summary['avg_dt_s']:.4g} ms, {ref_summary['steps']:,} steps, "
-            f"{ref_summary['wall_time_s']:.1f} s wall.")
-    hdr = ["configuration", "particles", "sim s", "wall s", "CPU s", "steps", "Δt ms avg (min–max)", "active %",
-           "speed-up vs global", "vs constant", "ρ err avg / max %", "net catches (droplets)"] + \
-          [k.replace("dev ", "RMS dev ") for k in dev_cols] + ["dev (mean rel.)"] + \
-          [k.replace("exp err ", "exp. err ") + " (ΔT)" for k in exp_cols]
-    wave_cols = "wave period s" in columns
-    if wave_cols:
-        hdr += ["wave period s (err %)", "decay 1/s (× theory)"]
-    lines = [head, "", "| " + " | ".join(hdr) + " |", "|" + "---|" * len(hdr)]
-    for row in rows:
-        if row["status"] != "ok":
-            lines.append(f"| {row['configuration']} | failed (see its run.log) |" + " |" * (len(hdr) - 2))
-            continue
-        cells = [row["configuration"], f"{row['particles']:,}", f"{row['simulated_s']:.3g}", f"{row['wall_s']:.1f}",
-                 f"{row['cpu_s']:.1f}", f"{row['steps']:,}", f"{row['avg_dt_ms']:.3g} ({row['min_dt_ms']:.3g}–{row['max_dt_ms']:.3g})",
-                 f"{row['avg_active_pct']:.0f}", fmt(row["speedup_vs_global"]), fmt(row["speedup_vs_constant"]),
-                 f"{row['avg_density_error_pct']:.2f} / {row['max_density_error_pct']:.1f}",
-                 f"{row['net_catches']:,}" + (f" ({row['droplet_contacts']:,})" if row["droplet_contacts"] is not None else "")]
-        cells += [fmt(row.get(k)) for k in dev_cols] + [fmt(row["deviation (mean rel.)"])]
-        cells += [f"{row[k]:.1f} ({row[k.replace('exp err ', 'exp shift ').replace(' %', '')]:+.2f}"
-                  + ("*" if row.get(k.replace("exp err ", "exp shift at bound ").replace(" %", "")) else "") + ")"
-                  for k in exp_cols]
-        if wave_cols:
-            cells += [f"{row['wave period s']:.4f} ({row['wave period err %']:+.2f})" if "wave period s" in row else "",
-                      f"{row['wave decay 1/s']:.4f} ({row['wave decay / theory']:.2f})" if "wave period s" in row else ""]
-        lines.append("| " + " | ".join(cells) + " |")
-    notes = [f"* {c['label']}: {c['note']}" for c in configs if c.get("note")]
-    if any(v is True for row in rows for k, v in row.items() if k.startswith("exp shift at bound ")):
-        notes.append("* ΔT marked * is the first or last shift the search could try (±max_shift, or where the run "
-                     "ends): a better fit may lie beyond it, with a wider `max_shift` or a longer run.")
-    for row in rows:
-        if row["status"] == "ok" and row["mode"] in ("global", "constant") and \
-                "evaluations / sound-crossing bound" in row:
-            notes.append(f"* {row['configuration']}: per-particle stepping at the same λc could evaluate at most "
-                         f"{row['evaluations / sound-crossing bound']:.2f}× less than this run (its "
-                         f"{row['evaluations per particle']:,.0f} evaluations per particle against "
-                         f"{row['evaluations per particle at the sound-crossing bound']:,.0f} at the sound-crossing "
-                         f"bound; tools/stepping_bound.py)")
-    theory = next((row["wave theory"] for row in rows if "wave theory" in row), None)
-    if theory:
-        notes.append(f"* standing wave, linear theory: {theory} (ν of the first run; each row's ratio uses its own); measured from the fluid "
-                     f"probe's centre_x after the wave is given")
-    text = "\n".join(lines + ([""] + notes if notes else [])) + "\n"
-    (study.out / "study.md").write_text(text)
+    if args.reference:
+        why = study.load_reference(pathlib.Path(args.reference), f"--reference {args.reference}", strict=False)
+        if why:
+            fail(why)
+        study.ref_note = None
+    study.run()
+    rows, text = study.write_tables()
     print()
     print(text)
+    configs, results = study.configs, study.results
+    wrote = [study.out / "study.md", study.out / "study.csv"]
 
-    # ---- Pareto plot ----
+    # ---- Pareto plot (none without a reference: no error axis) ----
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    ok = [r for r in rows if r["status"] == "ok"]
-    pts = [(r["wall_s"], r["deviation (mean rel.)"]) for r in ok]
-    front = pareto_front(pts)
-    fig, ax = plt.subplots(figsize=(7, 4.5), dpi=110)
-    ax.scatter([p[0] for p in pts], [p[1] for p in pts], color="0.5", zorder=2, label="configuration")
-    if front:
-        ax.plot([pts[i][0] for i in front], [pts[i][1] for i in front], "-o", color="tab:red", zorder=3,
-                label="non-dominated (Pareto front)")
-    for r, (x, y) in zip(ok, pts):
-        if math.isfinite(y):
-            ax.annotate(r["configuration"], (x, y), textcoords="offset points", xytext=(5, 4), fontsize=8)
-    ax.set_xlabel("wall time (s)")
-    ax.set_ylabel("deviation from the reference (mean RMS / range)")
-    ax.set_title(f"{study.scene_json.get('name')}: speed against accuracy ({args.threads} threads, "
-                 f"{started.strftime('%Y-%m-%d')})", fontsize=10)
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(study.out / "pareto.png")
+    if study.ref_note is None:
+        ok = [r for r in rows if r["status"] == "ok"]
+        pts = [(r["wall_s"], r["deviation (mean rel.)"]) for r in ok]
+        front = pareto_front(pts)
+        fig, ax = plt.subplots(figsize=(7, 4.5), dpi=110)
+        ax.scatter([p[0] for p in pts], [p[1] for p in pts], color="0.5", zorder=2, label="configuration")
+        if front:
+            ax.plot([pts[i][0] for i in front], [pts[i][1] for i in front], "-o", color="tab:red", zorder=3,
+                    label="non-dominated (Pareto front)")
+        for r, (x, y) in zip(ok, pts):
+            if math.isfinite(y):
+                ax.annotate(r["configuration"], (x, y), textcoords="offset points", xytext=(5, 4), fontsize=8)
+        ax.set_xlabel("wall time (s)")
+        ax.set_ylabel("deviation from the reference (mean RMS / range)")
+        ax.set_title(f"{study.scene_json.get('name')}: speed against accuracy ({args.threads} threads, "
+                     f"{study.started.strftime('%Y-%m-%d')})", fontsize=10)
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8)
+        fig.tight_layout()
+        fig.savefig(study.out / "pareto.png")
+        wrote.append(study.out / "pareto.png")
     # ---- dt over time (He Fig. 2: dt_sim and the active fraction; Ihmsen Fig. 4: dt), every run ----
     plot = HERE / "plot_dt.py"
     if not plot.is_file():
@@ -672,10 +764,20 @@ def main():
         proc = subprocess.run(cmd, capture_output=True, text=True)
         if proc.returncode != 0:
             print(f"sph-study: warning: plot_dt.py failed: {proc.stderr.strip()}", file=sys.stderr)
+        else:
+            wrote.append(study.out / "dt.png")
     elif runs:
         print(f"sph-study: warning: no dt.png: plot_dt.py is not beside {HERE / 'sph-study'}", file=sys.stderr)
-    wrote = [study.out / "study.md", study.out / "study.csv", study.out / "pareto.png", study.out / "dt.png"]
-    print("wrote " + ", ".join(str(f) for f in wrote if f.is_file()))
+    print("wrote " + ", ".join(str(f) for f in wrote))
+    # What the tables could not say: exit 2, after they are written, with one line.
+    problems = []
+    if study.ref_note is not None:
+        problems.append(f"the accuracy columns are unavailable: {study.ref_note.split(': ', 1)[1]}")
+    unreadable = [(c["label"], p) for c, p in zip(configs, study.problems) if p and p.startswith("unreadable")]
+    if unreadable:
+        problems.append(f"{len(unreadable)} run(s) unreadable (" + "; ".join(f"{c}: {p}" for c, p in unreadable) + ")")
+    if problems:
+        fail("; ".join(problems) + f"; {study.out / 'study.csv'} and study.md have every other figure")
 
 
 if __name__ == "__main__":
