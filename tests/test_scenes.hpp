@@ -62,6 +62,18 @@ inline Scene pool_with_pushed_box() {
     return s;
 }
 
+/// pool_with_pushed_box with the pool's water around the box only (five blocks), as the loader
+/// requires of a scene (a fluid block clear of every box obstacle) and so validate_scene does.
+inline Scene pool_around_pushed_box() {
+    Scene s = pool_with_pushed_box();
+    s.fluid_blocks.clear();
+    for (const Aabb& block : {Aabb{Vec3d(0, 0, 0), Vec3d(0.10, 0.12, 0.12)}, Aabb{Vec3d(0.14, 0, 0), Vec3d(0.4, 0.12, 0.12)},
+                              Aabb{Vec3d(0.10, 0, 0), Vec3d(0.14, 0.12, 0.03)}, Aabb{Vec3d(0.10, 0, 0.07), Vec3d(0.14, 0.12, 0.12)},
+                              Aabb{Vec3d(0.10, 0, 0.03), Vec3d(0.14, 0.04, 0.07)}})
+        s.fluid_blocks.push_back(FluidBlock{block, Vec3d::Zero(), true});
+    return s;
+}
+
 /// Moves every fluid particle by up to `fraction` r per axis (uniform, seeded), keeping it 2 mm
 /// inside the walls of a container at the origin.
 inline void jitter(World& w, std::uint32_t seed, Real fraction) {

@@ -27,6 +27,7 @@ struct Aabb {
     bool contains(const Vec3d& p) const {
         return (p.array() >= min.array()).all() && (p.array() <= max.array()).all();
     }
+    bool operator==(const Aabb&) const = default;
 };
 
 }  // namespace sph

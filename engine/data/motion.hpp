@@ -41,6 +41,7 @@ struct Motion {
     Vec3d center{0, 0, 0};       ///< circle: m
     double radius = 0;           ///< circle: m, > 0
     Vec3d start{1, 0, 0};        ///< circle: unit vector u from center to the start, in the plane
+    bool operator==(const Motion&) const = default;
 };
 
 /// @brief d(t) in metres (t in seconds, t >= 0).

@@ -39,6 +39,7 @@ struct ProbeExperiment {
     double value_offset = 0.0; ///< unit of the probe value
     double max_shift = 0.0;    ///< largest constant time shift |dT| allowed (dimensionless)
     double t_min = -1e300, t_max = 1e300;  ///< compared range of T (dimensionless)
+    bool operator==(const ProbeExperiment&) const = default;
 };
 
 struct ProbeDesc {
@@ -60,6 +61,7 @@ struct ProbeDesc {
     Vec3d direction{1, 0, 0};  ///< unit; the front is the largest projection on it
     int min_neighbours = 4;
     std::optional<ProbeExperiment> experiment;
+    bool operator==(const ProbeDesc&) const = default;
 };
 
 /// @brief Reads and validates the `probes` array; throws SceneError (file, JSON path, value

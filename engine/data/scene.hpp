@@ -89,6 +89,7 @@ struct SteppingParams {
     /// `binned` only: keep the fluid grid on steps with few due rows while no row can have moved
     /// far (FluidGridSystem); false builds it every step. The results are the same bit for bit.
     bool keep_grid = true;
+    bool operator==(const SteppingParams&) const = default;
 };
 
 /// @brief PCISPH (Solenthaler & Pajarola 2009; Ihmsen et al. 2010 Alg. 2) and its adaptive step.
@@ -100,6 +101,7 @@ struct PcisphParams {
     double eta = 0.01;           ///< eta_avg: target average compression (fraction of rho0)
     std::optional<double> eta_max;       ///< default 10 eta (Ihmsen sec. 3.3)
     std::optional<double> delta_shock;   ///< eq. 25 threshold; default 4 eta, within (eta, eta_max)
+    bool operator==(const PcisphParams&) const = default;
 };
 
 /// @brief Divergence-free SPH (Bender & Koschier 2015, 2017): the density solver's target
@@ -119,12 +121,14 @@ struct DfsphParams {
     /// 1.5 cuts its passes by a third to a half at the same error (docs/results/dfsph.md).
     double relaxation = 1.5;
     double cfl = 0.4;                ///< adaptive: dt = cfl 2 r / v_max, at most stepping.dt_max
+    bool operator==(const DfsphParams&) const = default;
 };
 
 /// @brief Boundary handling of PCISPH (`boundary` section of a scene).
 struct BoundaryParams {
     BoundaryHandling handling = BoundaryHandling::Ihmsen;
     double friction = 1.0;  ///< epsilon of Ihmsen eq. 12: 1 keeps the tangential velocity (free slip)
+    bool operator==(const BoundaryParams&) const = default;
 };
 
 struct SimulationParams {
@@ -142,6 +146,7 @@ struct SimulationParams {
     /// the CPU has (runtime dispatch: AVX-512, AVX2, else portable); false runs the scalar
     /// reference loops. Float builds only: with SPH_DOUBLE the scalar loops always run.
     bool simd = true;
+    bool operator==(const SimulationParams&) const = default;
 };
 
 struct FluidParams {
@@ -177,6 +182,7 @@ struct FluidParams {
     /// WCSPH only: the boundary particles' pressure (WallPressure). Unset: `extrapolated` with the
     /// continuity density, `mirrored` with the summation density.
     std::optional<WallPressure> wall_pressure;
+    bool operator==(const FluidParams&) const = default;
 };
 
 /// @brief A linear standing wave (sloshing mode n) given to the fluid of a one-block WCSPH scene
@@ -191,6 +197,7 @@ struct StandingWaveDesc {
     double amplitude = 0.0;  ///< a0, m
     int mode = 1;            ///< n >= 1
     double at = 0.0;         ///< s
+    bool operator==(const StandingWaveDesc&) const = default;
 };
 
 /// @brief A block of fluid particles on a cubic lattice of spacing 2 r, filling [min, max].
@@ -202,6 +209,7 @@ struct FluidBlock {
     /// summation density at depth d is the Tait density of pressure rho0 g d. Otherwise the
     /// column starts at rho0 everywhere and rings acoustically (period 4 H / c_s).
     bool hydrostatic = true;
+    bool operator==(const FluidBlock&) const = default;
 };
 
 enum class BoundaryShape { Container, Box, Sphere, Cylinder, Heightfield, Mesh };
@@ -227,6 +235,7 @@ struct BoundaryDesc {
     std::vector<std::vector<double>> heights;  ///< heightfield
     std::filesystem::path file;                ///< mesh: the OBJ file (resolved)
     std::optional<Motion> motion;  ///< none: static
+    bool operator==(const BoundaryDesc&) const = default;
 };
 
 /// @brief Reads the triangles of a Wavefront OBJ file (`v` and `f` lines; polygons are fanned
@@ -253,6 +262,7 @@ struct EmitterDesc {
     double start = 0;         ///< s
     double end = std::numeric_limits<double>::infinity();  ///< s
     std::uint64_t max_particles = std::numeric_limits<std::uint64_t>::max();  ///< this emitter's total
+    bool operator==(const EmitterDesc&) const = default;
 };
 
 /// @brief The candidate positions of an emitter, in the order they are tried: a square lattice of
@@ -283,6 +293,7 @@ struct SurfaceParams {
     Resolved resolve(double r) const {
         return {voxel_size.value_or(r), sphere_radius.value_or(3.0 * r), smoothing.value_or(r), keep_volume};
     }
+    bool operator==(const SurfaceParams&) const = default;
 };
 
 struct OutputParams {
@@ -296,6 +307,7 @@ struct OutputParams {
     std::vector<std::string> attributes{"velocity", "density", "pressure"};
     /// False: the default list above, to which individual stepping adds dt and active.
     bool attributes_explicit = false;
+    bool operator==(const OutputParams&) const = default;
 };
 
 /// @brief Particles per axis when a box is filled on a cubic lattice of the given spacing:
@@ -330,6 +342,7 @@ struct Scene {
 
     /// @brief Particle radius after `scale`.
     double particle_radius() const;
+    bool operator==(const Scene&) const = default;
 };
 
 /// @brief The density form a scene runs with: fluid.density, or unset `continuity` for WCSPH (with
@@ -381,7 +394,7 @@ SizeEstimate estimate_size(const Scene& scene);
 
 /// @brief Whether `method` runs with a kernel support of `support` particle spacings: WCSPH with
 /// any in [1.5, 4]; PCISPH and DFSPH with 2 only (docs/methods.md, "Known limitations"). The
-/// loader refuses a scene file against it, make_recipe a scene built in code.
+/// loader (and so validate_scene) refuses a scene against it.
 inline bool method_takes_support(Method method, double support) {
     return method == Method::Wcsph || support == 2.0;
 }
@@ -398,6 +411,17 @@ std::string read_scene_file(const std::filesystem::path& file);
 /// @brief Parses and validates scene JSON text; `file` names it in error messages.
 Scene parse_scene(const std::string& text, const std::string& file,
                   const std::vector<std::pair<std::string, nlohmann::json>>& overrides = {});
+
+/// @brief The scene as a scene file that loads back into an equal Scene (docs/usage.md, "Scene
+/// files"): every value written out, an optional key only when set, a method's own sections only,
+/// a mesh inline (`vertices`, `triangles`) whatever file it was read from.
+nlohmann::json scene_to_json(const Scene& scene);
+
+/// @brief Checks a scene built or changed in code against every rule the loader applies to a
+/// scene file (scene_to_json read back by parse_scene): throws SceneError naming the key by its
+/// scene-file path (`/fluid/particle_radius`), the value found and what was expected, the scene
+/// named as `scene "NAME" (built in code)` or `FILE (changed in code)`. make_recipe calls it.
+void validate_scene(const Scene& scene);
 
 /// @brief The domain of a scene that declares none: the bounding box of its boundaries (swept by
 /// their motion to the end time), fluid blocks and emitters, grown by the support radius h (m).

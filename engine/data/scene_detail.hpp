@@ -47,7 +47,7 @@ inline constexpr std::array<const char*, 4> k_boxlike_boundary_keys{"type", "min
 inline constexpr std::array<const char*, 4> k_sphere_boundary_keys{"type", "center", "radius", "motion"};
 inline constexpr std::array<const char*, 6> k_cylinder_boundary_keys{"type", "center", "axis", "radius", "height", "motion"};
 inline constexpr std::array<const char*, 4> k_heightfield_boundary_keys{"type", "min", "max", "heights"};
-inline constexpr std::array<const char*, 4> k_mesh_boundary_keys{"type", "file", "scale", "translate"};
+inline constexpr std::array<const char*, 6> k_mesh_boundary_keys{"type", "file", "vertices", "triangles", "scale", "translate"};
 inline constexpr std::array<const char*, 2> k_linear_motion_keys{"type", "velocity"};
 inline constexpr std::array<const char*, 5> k_sinusoidal_motion_keys{"type", "axis", "amplitude", "period",
                                                               "phase"};

@@ -48,10 +48,13 @@ void heightfield_triangles(const Aabb& span, BoundaryDesc& b) {
             b.triangles.push_back({id(i, k), id(i, k + 1), id(i + 1, k)});
             b.triangles.push_back({id(i + 1, k), id(i, k + 1), id(i + 1, k + 1)});
         }
-    b.box = Aabb{Vec3d::Constant(std::numeric_limits<double>::max()), Vec3d::Constant(std::numeric_limits<double>::lowest())};
+    // The declared span in x and z (the last vertex may round an ulp off it), the heights' range in y.
+    b.box = span;
+    b.box.min.y() = std::numeric_limits<double>::max();
+    b.box.max.y() = std::numeric_limits<double>::lowest();
     for (const auto& v : b.vertices) {
-        b.box.min = b.box.min.cwiseMin(v);
-        b.box.max = b.box.max.cwiseMax(v);
+        b.box.min.y() = std::min(b.box.min.y(), v.y());
+        b.box.max.y() = std::max(b.box.max.y(), v.y());
     }
 }
 
@@ -442,12 +445,10 @@ class Reader {
         if (const json* v = n.find("gravity")) p.gravity = vec3(n.at(*v, "gravity"), "m/s^2");
         if (const json* v = n.find("sort_interval")) {
             const Node s = n.at(*v, "sort_interval");
-            const char* what = "an integer >= 1 (steps)";
+            const char* what = "an integer >= 0 (steps; 0 never re-sorts)";
             if (!v->is_number_integer()) fail(s.path, dump(*v), what);
-            const bool in_range =
-                v->is_number_unsigned()
-                    ? v->get<std::uint64_t>() >= 1 && v->get<std::uint64_t>() <= INT_MAX
-                    : v->get<std::int64_t>() >= 1 && v->get<std::int64_t>() <= INT_MAX;
+            const bool in_range = v->is_number_unsigned() ? v->get<std::uint64_t>() <= INT_MAX
+                                                          : v->get<std::int64_t>() >= 0 && v->get<std::int64_t>() <= INT_MAX;
             if (!in_range) {
                 fail(s.path, dump(*v), what);
             }
@@ -752,24 +753,34 @@ class Reader {
             check_keys(n, k_mesh_boundary_keys, context);
             const json* f = n.find("file");
             const char* what = "a path to a Wavefront OBJ file (relative to the scene file)";
-            if (!f) fail(child(n.path, "file"), "nothing", what);
-            if (!f->is_string() || f->get<std::string>().empty()) fail(child(n.path, "file"), dump(*f), what);
-            std::filesystem::path path = f->get<std::string>();
-            if (path.is_relative()) path = std::filesystem::path(m_file).parent_path() / path;
+            const json* inline_vertices = n.find("vertices");
+            if (f && inline_vertices)
+                fail_at(child(n.path, "vertices"), dump(*inline_vertices),
+                        "no vertices beside a file: a mesh is an OBJ file or vertices and triangles",
+                        {child(n.path, "vertices"), child(n.path, "file")});
+            if (!f && !inline_vertices)
+                fail(child(n.path, "file"), "nothing", std::string(what) + ", or vertices and triangles");
             double scale = 1.0;
             read_number(n, "scale", positive("factor applied to the OBJ coordinates"), scale);
             Vec3d translate = Vec3d::Zero();
             if (const json* t = n.find("translate")) translate = vec3(n.at(*t, "translate"), "metres");
-            if (!std::filesystem::is_regular_file(path))
-                fail(child(n.path, "file"), dump(*f), std::string(what) + "; there is no such file in the scene file's folder");
-            b.file = path;
-            try {
-                read_obj(path, b.vertices, b.triangles, f->get<std::string>());
-            } catch (const InputError& e) {  // a corrupt file: name it as the scene does
-                fail(child(n.path, "file"), dump(*f), std::string(what) + "; " + e.what());
+            if (f) {
+                if (!f->is_string() || f->get<std::string>().empty()) fail(child(n.path, "file"), dump(*f), what);
+                std::filesystem::path path = f->get<std::string>();
+                if (path.is_relative()) path = std::filesystem::path(m_file).parent_path() / path;
+                if (!std::filesystem::is_regular_file(path))
+                    fail(child(n.path, "file"), dump(*f), std::string(what) + "; there is no such file in the scene file's folder");
+                b.file = path;
+                try {
+                    read_obj(path, b.vertices, b.triangles, f->get<std::string>());
+                } catch (const InputError& e) {  // a corrupt file: name it as the scene does
+                    fail(child(n.path, "file"), dump(*f), std::string(what) + "; " + e.what());
+                }
+                if (b.triangles.empty())
+                    fail(child(n.path, "file"), dump(*f), std::string(what) + " with at least one face (f line)");
+            } else {
+                read_inline_mesh(n, b);
             }
-            if (b.triangles.empty())
-                fail(child(n.path, "file"), dump(*f), std::string(what) + " with at least one face (f line)");
             for (auto& v : b.vertices) v = scale * v + translate;
             b.box = Aabb{Vec3d::Constant(std::numeric_limits<double>::max()),
                          Vec3d::Constant(std::numeric_limits<double>::lowest())};
@@ -783,6 +794,34 @@ class Reader {
         }
         if (const json* v = n.find("motion")) b.motion = read_motion(n.at(*v, "motion"), b);
         return b;
+    }
+
+    /// A mesh given in the scene: `vertices`, at least 3 points (metres), and `triangles`, at
+    /// least one triple of vertex indices (0-based), each index below the vertex count.
+    void read_inline_mesh(const Node& n, BoundaryDesc& b) const {
+        const json& v = *n.find("vertices");
+        const Node vn = n.at(v, "vertices");
+        if (!v.is_array() || v.size() < 3) fail(vn.path, dump(v), "an array of at least 3 points, each an array of 3 numbers (metres)");
+        for (std::size_t i = 0; i < v.size(); ++i) b.vertices.push_back(vec3({v[i], child(vn.path, i)}, "metres"));
+        const std::string what = "an array of at least one triangle, each an array of 3 vertex indices from 0 to " +
+                                 std::to_string(v.size() - 1);
+        const json* t = n.find("triangles");
+        if (!t) fail(child(n.path, "triangles"), "nothing", what);
+        const Node tn = n.at(*t, "triangles");
+        if (!t->is_array() || t->empty()) fail(tn.path, dump(*t), what);
+        for (std::size_t k = 0; k < t->size(); ++k) {
+            const Node e{(*t)[k], child(tn.path, k)};
+            if (!e.value.is_array() || e.value.size() != 3) fail(e.path, dump(e.value), what);
+            std::array<int, 3> tri{};
+            for (std::size_t c = 0; c < 3; ++c) {
+                const json& x = e.value[c];
+                if (!x.is_number_integer() || (!x.is_number_unsigned() && x.get<std::int64_t>() < 0) ||
+                    x.get<std::uint64_t>() >= v.size())
+                    fail(child(e.path, c), dump(x), what);
+                tri[c] = int(x.get<std::uint64_t>());
+            }
+            b.triangles.push_back(tri);
+        }
     }
 
     double required_number(const Node& obj, const char* key, const Range& range) const {

@@ -1,8 +1,5 @@
 #include "systems/methods/recipes.hpp"
 
-#include <string>
-
-#include "engine/core/errors.hpp"
 #include "systems/methods/dfsph.hpp"
 #include "systems/methods/pcisph.hpp"
 #include "systems/methods/wcsph.hpp"
@@ -10,11 +7,8 @@
 namespace sph {
 
 Recipe make_recipe(const Scene& scene) {
-    // A scene built in code does not pass the loader's checks; this one guards a recipe that would
-    // blow up (docs/methods.md, "Known limitations"), as the loader does for a scene file.
-    if (!method_takes_support(scene.simulation.method, scene.fluid.support))
-        throw InputError("fluid.support = " + std::to_string(scene.fluid.support) + ": methods \"pcisph\" and "
-                         "\"dfsph\" run with the kernel support of 2 particle spacings only");
+    // A scene built or changed in code meets the loader's rules as a scene file does.
+    validate_scene(scene);
     switch (scene.simulation.method) {
         case Method::Wcsph:
             return make_wcsph_recipe(scene);

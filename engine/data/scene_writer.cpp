@@ -1,0 +1,247 @@
+/// @file
+/// @brief A Scene as the scene file that loads back into it (scene_to_json), and the loader's
+/// checks for a scene built or changed in code (validate_scene): the scene written out and read
+/// back by parse_scene, so that one set of rules, with one set of messages, covers both.
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "engine/data/scene.hpp"
+
+namespace sph {
+
+namespace {
+
+using json = nlohmann::json;
+
+json vec(const Vec3d& v) {
+    return json::array({v.x(), v.y(), v.z()});
+}
+
+json box(const Aabb& b) {
+    return json{{"min", vec(b.min)}, {"max", vec(b.max)}};
+}
+
+json motion_json(const Motion& m) {
+    json j{{"type", to_string(m.type)}};
+    switch (m.type) {
+        case MotionType::Linear:
+            j["velocity"] = vec(m.velocity);
+            break;
+        case MotionType::Sinusoidal:
+            j["axis"] = vec(m.axis);
+            j["amplitude"] = m.amplitude;
+            j["period"] = m.period;
+            j["phase"] = m.phase;
+            break;
+        case MotionType::Path: {
+            json pts = json::array();
+            for (const Vec3d& p : m.points) pts.push_back(vec(p));
+            j["points"] = std::move(pts);
+            j["speed"] = m.speed;
+            j["loop"] = m.loop;
+            break;
+        }
+        case MotionType::Circle:  // `start` is derived from the body's position, as the loader does
+            j["center"] = vec(m.center);
+            j["radius"] = m.radius;
+            j["axis"] = vec(m.axis);
+            j["speed"] = m.speed;
+            break;
+    }
+    return j;
+}
+
+json boundary_json(const BoundaryDesc& b) {
+    json j{{"type", to_string(b.shape)}};
+    switch (b.shape) {
+        case BoundaryShape::Container:
+        case BoundaryShape::Box:
+            j.update(box(b.box));
+            break;
+        case BoundaryShape::Sphere:
+            j["center"] = vec(b.center);
+            j["radius"] = b.radius;
+            break;
+        case BoundaryShape::Cylinder:
+            j["center"] = vec(b.center);
+            j["axis"] = vec(b.axis);
+            j["radius"] = b.radius;
+            j["height"] = b.height;
+            break;
+        case BoundaryShape::Heightfield:
+            j.update(box(b.box));
+            j["heights"] = b.heights;
+            break;
+        case BoundaryShape::Mesh: {  // inline: exact whatever file, scale and offset it came from
+            json v = json::array(), t = json::array();
+            for (const Vec3d& p : b.vertices) v.push_back(vec(p));
+            for (const auto& f : b.triangles) t.push_back(json::array({f[0], f[1], f[2]}));
+            j["vertices"] = std::move(v);
+            j["triangles"] = std::move(t);
+            break;
+        }
+    }
+    if (b.motion) j["motion"] = motion_json(*b.motion);
+    return j;
+}
+
+const char* source_name(PressureSource s) {
+    return s == PressureSource::Fluid ? "fluid" : s == PressureSource::Boundary ? "boundary" : "sensor";
+}
+
+json probe_json(const ProbeDesc& d) {
+    json j{{"type", to_string(d.type)}, {"name", d.name}, {"rate", d.rate}};
+    switch (d.type) {
+        case ProbeType::Pressure:
+            j["point"] = vec(d.point);
+            j["source"] = source_name(d.source);
+            if (d.source == PressureSource::Boundary && d.radius > 0) j["radius"] = d.radius;
+            if (d.source == PressureSource::Sensor) j["diameter"] = d.diameter, j["normal"] = vec(d.normal);
+            break;
+        case ProbeType::Height:
+            j["from"] = vec(d.from);
+            j["to"] = vec(d.to);
+            j["method"] = d.height_method == HeightMethod::Column ? "column" : "highest";
+            break;
+        case ProbeType::Front:
+            if (d.method == FrontMethod::Neighbours) {
+                j["method"] = "neighbours";
+                j["direction"] = vec(d.direction);
+                j["min_neighbours"] = d.min_neighbours;
+            } else {
+                j["method"] = "colour";
+                j["from"] = vec(d.from);
+                j["to"] = vec(d.to);
+            }
+            break;
+        case ProbeType::Fluid:
+            break;
+    }
+    if (d.experiment) {
+        const ProbeExperiment& e = *d.experiment;
+        json x{{"file", e.file},           {"t_scale", e.t_scale},     {"value_scale", e.value_scale},
+               {"value_offset", e.value_offset}, {"max_shift", e.max_shift}};
+        if (e.t_min != ProbeExperiment{}.t_min || e.t_max != ProbeExperiment{}.t_max)
+            x["t_range"] = json::array({e.t_min, e.t_max});
+        j["experiment"] = std::move(x);
+    }
+    return j;
+}
+
+}  // namespace
+
+nlohmann::json scene_to_json(const Scene& s) {
+    json j;
+    j["name"] = s.name;
+
+    const SimulationParams& sim = s.simulation;
+    const SteppingParams& st = sim.stepping;
+    json stepping{{"mode", to_string(st.mode)},         {"dt", st.dt},           {"lambda_v", st.lambda_v},
+                  {"lambda_f", st.lambda_f},            {"acoustic", st.acoustic}, {"lambda_c", st.lambda_c},
+                  {"dt_max", st.dt_max},                {"dt_min", st.dt_min},   {"activation", to_string(st.activation)},
+                  {"keep_grid", st.keep_grid}};
+    j["simulation"] = json{{"method", to_string(sim.method)}, {"stepping", std::move(stepping)},
+                           {"end_time", sim.end_time},        {"frame_rate", sim.frame_rate},
+                           {"scale", sim.scale},              {"gravity", vec(sim.gravity)},
+                           {"sort_interval", sim.sort_interval}, {"simd", sim.simd}};
+    if (s.domain) j["domain"] = box(*s.domain);
+
+    const FluidParams& f = s.fluid;
+    json fluid{{"rest_density", f.rest_density},
+               {"particle_radius", f.particle_radius},
+               {"support", f.support},
+               {"density_fluctuation", f.density_fluctuation},
+               {"surface_tension", f.surface_tension},
+               {"pressure_gradient", to_string(f.pressure_gradient)}};
+    if (f.viscosity) fluid["viscosity"] = *f.viscosity;
+    if (f.speed_of_sound) fluid["speed_of_sound"] = *f.speed_of_sound;
+    if (f.boundary_viscosity) fluid["boundary_viscosity"] = *f.boundary_viscosity;
+    if (f.density) fluid["density"] = to_string(*f.density);
+    if (f.density_diffusion) fluid["density_diffusion"] = *f.density_diffusion;
+    if (f.kinematic_viscosity) fluid["kinematic_viscosity"] = *f.kinematic_viscosity;
+    if (f.wall_pressure) fluid["wall_pressure"] = to_string(*f.wall_pressure);
+    j["fluid"] = std::move(fluid);
+
+    json blocks = json::array();
+    for (const FluidBlock& b : s.fluid_blocks) {
+        json block = box(b.box);
+        block["velocity"] = vec(b.velocity);
+        block["hydrostatic"] = b.hydrostatic;
+        blocks.push_back(std::move(block));
+    }
+    j["fluid_blocks"] = std::move(blocks);
+    json boundaries = json::array();
+    for (const BoundaryDesc& b : s.boundaries) boundaries.push_back(boundary_json(b));
+    j["boundaries"] = std::move(boundaries);
+
+    if (!s.emitters.empty()) {
+        json emitters = json::array();
+        for (const EmitterDesc& e : s.emitters) {
+            json em{{"position", vec(e.position)}, {"velocity", vec(e.velocity)}, {"radius", e.radius},
+                    {"rate", e.rate},              {"start", e.start}};
+            if (std::isfinite(e.end)) em["end"] = e.end;  // no end: emits to the run's end
+            if (e.max_particles != std::numeric_limits<std::uint64_t>::max()) em["max_particles"] = e.max_particles;
+            emitters.push_back(std::move(em));
+        }
+        j["emitters"] = std::move(emitters);
+    }
+
+    const OutputParams& o = s.output;
+    json formats = json::array();
+    for (FrameFormat ff : o.formats) formats.push_back(to_string(ff));
+    json output{{"format", std::move(formats)}};
+    json surface{{"keep_volume", o.surface.keep_volume}};
+    if (o.surface.voxel_size) surface["voxel_size"] = *o.surface.voxel_size;
+    if (o.surface.sphere_radius) surface["sphere_radius"] = *o.surface.sphere_radius;
+    if (o.surface.smoothing) surface["smoothing"] = *o.surface.smoothing;
+    output["surface"] = std::move(surface);
+    if (o.attributes_explicit) output["attributes"] = o.attributes;
+    j["output"] = std::move(output);
+
+    // A method's own sections only: the loader refuses another method's.
+    if (sim.method == Method::Pcisph) {
+        const PcisphParams& p = s.pcisph;
+        json pc{{"iterations", p.iterations},
+                {"max_iterations", p.max_iterations},
+                {"loop", to_string(p.loop)},
+                {"eta", p.eta}};
+        if (p.eta_max) pc["eta_max"] = *p.eta_max;
+        if (p.delta_shock) pc["delta_shock"] = *p.delta_shock;
+        j["pcisph"] = std::move(pc);
+        j["boundary"] = json{{"handling", to_string(s.boundary.handling)}, {"friction", s.boundary.friction}};
+    }
+    if (sim.method == Method::Dfsph) {
+        const DfsphParams& d = s.dfsph;
+        j["dfsph"] = json{{"eta", d.eta},
+                          {"eta_divergence", d.eta_divergence},
+                          {"min_iterations", d.min_iterations},
+                          {"max_iterations", d.max_iterations},
+                          {"min_divergence_iterations", d.min_divergence_iterations},
+                          {"max_divergence_iterations", d.max_divergence_iterations},
+                          {"divergence", d.divergence},
+                          {"warm_start", d.warm_start},
+                          {"relaxation", d.relaxation},
+                          {"cfl", d.cfl}};
+    }
+    if (!s.probes.empty()) {
+        json probes = json::array();
+        for (const ProbeDesc& d : s.probes) probes.push_back(probe_json(d));
+        j["probes"] = std::move(probes);
+    }
+    if (s.standing_wave)
+        j["standing_wave"] = json{{"amplitude", s.standing_wave->amplitude},
+                                  {"mode", s.standing_wave->mode},
+                                  {"at", s.standing_wave->at}};
+    return j;
+}
+
+void validate_scene(const Scene& scene) {
+    // Non-finite numbers have no JSON form (nlohmann writes null): the loader then names the key
+    // and says what it expected, as for a file that held null there.
+    const std::string label =
+        scene.source.empty() ? "scene \"" + scene.name + "\" (built in code)" : scene.source.string() + " (changed in code)";
+    (void)parse_scene(scene_to_json(scene).dump(), label);
+}
+
+}  // namespace sph
