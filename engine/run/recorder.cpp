@@ -47,6 +47,18 @@ void check_surface_formats(const World& w) {
                      "\" needs OpenVDB: this build has SPH_WITH_OPENVDB=OFF (rebuild with it ON, or choose "
                      "vtu, bgeo or ply)");
 }
+/// The scene as this run runs it (every override applied: `sph-run DIR/scene.json` runs it again),
+/// with the experiment files of its probes made absolute, since the file no longer sits beside them.
+void write_scene(const std::filesystem::path& dir, const Scene& scene) {
+    nlohmann::json j = scene_to_json(scene);
+    if (!scene.source.empty() && j.contains("probes"))
+        for (auto& probe : j["probes"])
+            if (probe.contains("experiment")) {
+                const std::filesystem::path f = probe["experiment"]["file"].get<std::string>();
+                if (f.is_relative()) probe["experiment"]["file"] = (std::filesystem::absolute(scene.source).parent_path() / f).lexically_normal().string();
+            }
+    write_file_atomic(dir / "scene.json", j.dump(2) + "\n");
+}
 constexpr std::size_t kMaxPendingStats = std::size_t(4) << 20;  // bytes of rows held in memory
 /// Room kept for salvage(): the most pending stats rows, plus summary.json and probes.
 constexpr std::size_t kReserveBytes = kMaxPendingStats + (std::size_t(1) << 20);
@@ -159,6 +171,7 @@ Recorder::Recorder(std::filesystem::path dir, const Simulation& sim)
     check_surface_formats(sim.world());
     std::filesystem::create_directories(m_dir);
     reserve_space();
+    write_scene(m_dir, sim.world().scene);
     m_pending = header(sim);
     m_t0 = std::chrono::steady_clock::now();
 }
@@ -168,6 +181,7 @@ Recorder::Recorder(std::filesystem::path dir, const Simulation& sim, const nlohm
     check_surface_formats(sim.world());
     std::filesystem::create_directories(m_dir);
     reserve_space();
+    write_scene(m_dir, sim.world().scene);
     m_frame = st.at("frame").get<std::size_t>();
     m_start_steps = sim.steps();
     m_first_frame = st.value("first_frame", std::size_t(0));  // absent before 2026-12-06: 0
