@@ -166,15 +166,111 @@ void restore_store(ComponentStore& store, const std::string& set, const Checkpoi
     }
 }
 
+std::uint64_t bits_of(double v) {
+    std::uint64_t b;
+    std::memcpy(&b, &v, 8);
+    return b;
+}
+double real_of(std::uint64_t b) {
+    double v;
+    std::memcpy(&v, &b, 8);
+    return v;
+}
+
+/// A saved state's clock (the rollback ring's): its end time too, which the state restores.
+nlohmann::json clock_section(const Clock& c) {
+    return {{"t_ticks", c.t_ticks}, {"step", c.step}, {"rollbacks", c.rollbacks},
+            {"rows_since_sort", c.rows_since_sort}, {"t_stop", bits_of(c.t_stop)}};
+}
+
+/// One column of a saved state: u32 element size, then the raw values (as column_section).
+std::string snapshot_column(ColumnBase& col) {
+    std::string s;
+    put(s, std::uint32_t(col.element_size()));
+    const auto raw = col.raw();
+    s.append(reinterpret_cast<const char*>(raw.data()), raw.size());
+    return s;
+}
+
+/// The rollback ring's states, oldest first: "ring/<k>/clock", "ring/<k>/fluid/<column>",
+/// "ring/<k>/boundary/<column>", "ring/<k>/resource/<name>".
+void ring_sections(const StateRing& ring, std::map<std::string, std::string>& sections) {
+    const auto held = ring.held();
+    for (std::size_t k = 0; k < held.size(); ++k) {
+        const std::string p = "ring/" + std::to_string(k) + "/";
+        const StateRing::State& st = *held[k];
+        sections[p + "clock"] = clock_section(st.clock).dump();
+        for (const auto& [name, col] : st.fluid.columns) sections[p + "fluid/" + name] = snapshot_column(*col);
+        for (const auto& [name, col] : st.boundary.columns) sections[p + "boundary/" + name] = snapshot_column(*col);
+        for (const auto& [name, r] : st.resources) sections[p + "resource/" + name] = r->bytes();
+    }
+}
+
+/// Refills the ring from the checkpoint's "ring/<k>/..." sections (a checkpoint written before
+/// 2026-12-07 has none: returns false). Each state is first saved from the restored world, which
+/// gives its columns and resources this recipe's types, then overwritten.
+bool restore_ring(StateRing& ring, const World& w, const Checkpoint& ck) {
+    const auto bad = [&](const std::string& section, const std::string& why) {
+        return CheckpointError(ck.file.string() + ": section '" + section + "' " + why);
+    };
+    std::size_t states = 0;
+    while (ck.sections.count("ring/" + std::to_string(states) + "/clock")) ++states;
+    if (states == 0) return false;
+    if (states > ring.depth())
+        throw bad("ring/" + std::to_string(states - 1) + "/clock",
+                  "is one of " + std::to_string(states) + " saved states; this recipe keeps " + std::to_string(ring.depth()));
+    for (std::size_t k = 0; k < states; ++k) {
+        const std::string p = "ring/" + std::to_string(k) + "/";
+        StateRing::State& st = ring.push(w);
+        try {
+            const nlohmann::json c = nlohmann::json::parse(ck.sections.at(p + "clock"));
+            st.clock.t_ticks = c.at("t_ticks").get<Tick>();
+            st.clock.t = to_seconds(st.clock.t_ticks);
+            st.clock.step = c.at("step").get<std::int64_t>();
+            st.clock.rollbacks = c.at("rollbacks").get<std::uint64_t>();
+            st.clock.rows_since_sort = c.at("rows_since_sort").get<std::uint64_t>();
+            st.clock.t_stop = real_of(c.at("t_stop").get<std::uint64_t>());
+        } catch (const nlohmann::json::exception& e) {
+            throw bad(p + "clock", std::string("is not a saved clock (") + e.what() + ")");
+        }
+        for (const auto& [set, snap] : {std::pair<const char*, ComponentStore::Snapshot*>{"fluid", &st.fluid},
+                                        std::pair<const char*, ComponentStore::Snapshot*>{"boundary", &st.boundary}}) {
+            std::size_t count = SIZE_MAX;
+            for (auto& [name, col] : snap->columns) {
+                const std::string section = p + set + "/" + name;
+                const auto it = ck.sections.find(section);
+                if (it == ck.sections.end()) throw bad(section, "is missing");
+                Cursor cur(it->second, section, ck.file);
+                const std::uint32_t size = cur.get<std::uint32_t>();
+                if (size != col->element_size() || cur.rest().size() % size != 0)
+                    throw bad(section, "has " + std::to_string(size) + "-byte values, this build stores " +
+                                           std::to_string(col->element_size()));
+                const std::size_t n = cur.rest().size() / size;
+                if (count != SIZE_MAX && n != count) throw bad(section, "has another length than the state's other columns");
+                count = n;
+                col->resize(n);
+                std::memcpy(col->raw().data(), it->second.data() + 4, n * size);
+            }
+            snap->size = count == SIZE_MAX ? 0 : count;
+        }
+        for (auto& [name, r] : st.resources) {
+            const auto it = ck.sections.find(p + "resource/" + name);
+            if (it == ck.sections.end()) throw bad(p + "resource/" + name, "is missing");
+            try {
+                r->load(it->second);
+            } catch (const std::runtime_error& e) {
+                throw bad(p + "resource/" + name, e.what());
+            }
+        }
+    }
+    return true;
+}
+
 /// The clock, the step size, the statistics, the rollback state and the counters, by name.
 /// Doubles are written as their exact bit patterns (JSON numbers would round-trip too, but
 /// infinities would not).
 nlohmann::json step_section(const World& w) {
-    const auto bits = [](double v) {
-        std::uint64_t b;
-        std::memcpy(&b, &v, 8);
-        return b;
-    };
+    const auto bits = bits_of;
     nlohmann::json j;
     j["clock"] = {{"t_ticks", w.clock.t_ticks}, {"step", w.clock.step}, {"rollbacks", w.clock.rollbacks},
                   {"rows_since_sort", w.clock.rows_since_sort}};
@@ -190,11 +286,7 @@ nlohmann::json step_section(const World& w) {
 }
 
 void restore_step(World& w, const std::string& text, const std::filesystem::path& file) {
-    const auto real = [](std::uint64_t b) {
-        double v;
-        std::memcpy(&v, &b, 8);
-        return v;
-    };
+    const auto real = real_of;
     try {
         const nlohmann::json j = nlohmann::json::parse(text);
         const auto& c = j.at("clock");
@@ -252,6 +344,7 @@ void write_checkpoint(const std::filesystem::path& file, const Simulation& sim, 
         put(bodies, b.speed);
     }
     sections["moving_bodies"] = bodies;
+    if (const StateRing* ring = sim.ring()) ring_sections(*ring, sections);
 
     std::string payload;
     for (const auto& [name, data] : sections) {
@@ -340,6 +433,7 @@ void restore_checkpoint(Simulation& sim, const Checkpoint& ck) {
             throw CheckpointError(ck.file.string() + ": section '" + key +
                                   "' is a resource this scene's method does not have");
     sim.forget_history();  // the rollback ring held states of the world before the restore
+    if (StateRing* ring = sim.ring(); ring && restore_ring(*ring, w, ck)) sim.history_restored();
 }
 
 }  // namespace sph

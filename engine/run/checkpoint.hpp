@@ -16,7 +16,11 @@
 /// resource a system owns, as its bytes), "fluid/<column>" and
 /// "boundary/<column>" (u32 element size, then the raw column), "fluid_neighbours" and
 /// "boundary_neighbours" (capacity, counts, entries), "active_set", "halo_set",
-/// "moving_bodies".
+/// "moving_bodies"; with a recipe that keeps a rollback ring (PCISPH `adaptive`), each state it
+/// holds, oldest first, as "ring/<k>/clock" (JSON, the end time as a bit pattern),
+/// "ring/<k>/fluid/<column>", "ring/<k>/boundary/<column>" and "ring/<k>/resource/<name>" (since
+/// 2026-12-07; a reader before it ignores them, and one after it reads a checkpoint without them
+/// as before: the ring starts empty).
 #include <filesystem>
 #include <cstdint>
 #include <map>

@@ -62,10 +62,18 @@ public:
     /// a signal handler's flag check; the state stays consistent, ready to be written).
     void request_stop() { m_stop.store(true, std::memory_order_relaxed); }
     /// @brief The world was replaced from outside (restore_checkpoint): the rollback ring's states
-    /// belong to the old one and are dropped. A checkpoint holds one state, so a rollback in the
-    /// first steps after it reaches back at most to it (a recipe's depth of 2: an uninterrupted
-    /// run would go one step further); the run logs a warning when that happens.
+    /// belong to the old one and are dropped. restore_checkpoint then refills it from the
+    /// checkpoint's "ring/..." sections and calls history_restored(); a checkpoint written before
+    /// 2026-12-07 has none, so a rollback in the first steps after it reaches back at most to it
+    /// (a recipe's depth of 2: an uninterrupted run would go one step further), and the run logs
+    /// a warning when that happens.
     void forget_history();
+    /// @brief The ring holds the states the checkpoint's run held: a short rollback is the
+    /// uninterrupted run's, with no warning.
+    void history_restored() { m_restored_at = -1; }
+    /// @brief The rollback ring (nullptr when the recipe keeps none).
+    const StateRing* ring() const { return m_ring.get(); }
+    StateRing* ring() { return m_ring.get(); }
 
     World& world() { return m_world; }
     const World& world() const { return m_world; }

@@ -17,6 +17,8 @@ public:
 
     /// @brief Saves the world's state as the newest entry (dropping the oldest when full).
     void save(const World& w);
+    /// @brief States it can hold.
+    std::size_t depth() const { return m_slots.size(); }
     /// @brief Number of states held.
     std::size_t size() const { return m_count; }
     /// @brief Drops every state (the world was replaced, e.g. by a checkpoint's).
@@ -26,13 +28,20 @@ public:
     /// (0 when the ring is empty and nothing was restored).
     std::size_t restore(World& w, std::size_t back);
 
-private:
-    struct Slot {
+    /// One saved state.
+    struct State {
         ComponentStore::Snapshot fluid, boundary;
         Clock clock;
         ResourceStore::Snapshot resources;
     };
-    std::vector<Slot> m_slots;
+    /// @brief The states held, oldest first (a checkpoint writes them).
+    std::vector<const State*> held() const;
+    /// @brief Saves `w` as the newest entry and returns it: a checkpoint's state overwrites it
+    /// (its columns and resources then have the types this world's recipe uses).
+    State& push(const World& w);
+
+private:
+    std::vector<State> m_slots;
     std::size_t m_next = 0;   ///< slot the next save writes
     std::size_t m_count = 0;  ///< states held
 };

@@ -202,6 +202,50 @@ TEST(Checkpoint, ResumedPcisphAdaptiveRunWithEmitterIsBitIdentical) {
     expect_resumed_pour_bit_identical(s, "pcisph_adaptive");
 }
 
+// PCISPH's shock rollback (Ihmsen et al. 2010 Alg. 2, eq. 25-27) goes back two steps: a
+// checkpoint taken just before the step that detects a shock carries the rollback ring's states
+// ("ring/<k>/..." sections), so the resumed run goes back as far as the uninterrupted one. On
+// `glass`, the first shock's step found in a first run; a second run checkpointed just before it
+// and continued 40 steps, against the same 40 steps from the checkpoint. Before the ring was
+// checkpointed (until 2026-12-07) the resumed rollback reached one step and the runs differed.
+TEST(Checkpoint, ResumedPcisphRunRollsBackAsFarAsTheUninterruptedOne) {
+    const fs::path k_dir = test_dir();
+    fs::create_directories(k_dir);
+    Scene s = load_scene(SPH_SOURCE_DIR "/scenes/glass.json");
+    s.simulation.frame_rate = 0;
+    std::int64_t shock_step = -1;
+    {
+        auto a = make_simulation(s);
+        while (shock_step < 0 && a->steps() < 20000) {
+            a->step();
+            if (a->last().rolled_back) shock_step = a->last().step;
+        }
+    }
+    ASSERT_GE(shock_step, 2) << "no shock in the first 20,000 steps of glass";
+    auto b = make_simulation(s);
+    while (b->steps() < shock_step) b->step();
+    const fs::path file = k_dir / "pcisph_shock.sphckpt";
+    write_checkpoint(file, *b, nlohmann::json::object());
+    ASSERT_EQ(b->ring()->size(), 2u);  // the ring is full: the rollback can go two steps back
+    b->step();
+    ASSERT_TRUE(b->last().rolled_back);
+    const std::int64_t b_back_to = b->world().clock.t_ticks;
+    for (int k = 0; k < 40; ++k) b->step();
+
+    auto c = make_simulation(s);
+    restore_checkpoint(*c, read_checkpoint(file));
+    ASSERT_EQ(c->ring()->size(), 2u);
+    c->step();
+    ASSERT_TRUE(c->last().rolled_back);
+    EXPECT_EQ(c->world().clock.t_ticks, b_back_to);  // back to the same time: two steps, not one
+    for (int k = 0; k < 40; ++k) c->step();
+    EXPECT_TRUE(state_bytes(b->world()) == state_bytes(c->world()))
+        << "the run resumed before the shock at step " << shock_step << " differs from the uninterrupted one";
+    std::printf("glass: first shock at step %lld; resumed just before it, rolled back to t = %.6g s as the "
+                "uninterrupted run\n", static_cast<long long>(shock_step), to_seconds(b_back_to));
+    fs::remove_all(k_dir);
+}
+
 // DFSPH on `glass` (its method replaced, as `--method dfsph` does): the warm-start totals are
 // Kept columns and the emitter's budget a Kept resource, so a resumed run equals the
 // uninterrupted one bit for bit.
