@@ -6,10 +6,15 @@
 #   FAKE_RULES='*/02_individual:truncate-summary */reference:fail'
 # Actions:
 #   truncate-summary  run, then cut summary.json to its first 60 bytes; exit 0
-#   truncate-probes   run, then cut every probes/*.csv in the middle of its sixth line; exit 0
+#   truncate-probes   run, then cut every probes/*.csv inside the first cell of its sixth line
+#                     (half that cell, no newline); exit 0
 #   no-probes         run, then remove probes/; exit 0
+#   interrupted       run, then mark summary.json "interrupted" by SIGTERM and exit 143, as
+#                     sph-run stopped by SIGTERM does
 #   fail              exit 3 at once, as a simulation that failed
 #   kill-tool         SIGKILL the tool that started this (a crash of the tool) before running
+#   int-tool          SIGINT the tool that started this (Ctrl-C), then wait (sleep 30) for the
+#                     tool to end this process; its pid goes to $FAKE_PIDFILE if set
 # Calls without --out (--list-modes) and runs no rule matches go to the real sph-run unchanged.
 set -uo pipefail
 set -f  # the rules' globs are patterns, not file names
@@ -29,6 +34,7 @@ case "$action" in
   "") exec "$FAKE_REAL" "$@" ;;
   fail) echo "fake sph-run: simulation failed (as asked)" >&2; exit 3 ;;
   kill-tool) kill -KILL "$PPID"; exit 137 ;;
+  int-tool) echo $$ > "${FAKE_PIDFILE:-/dev/null}"; kill -INT "$PPID"; exec sleep 30 ;;
 esac
 "$FAKE_REAL" "$@" || exit $?
 case "$action" in
@@ -37,9 +43,15 @@ case "$action" in
   truncate-probes)
     set +f
     for f in "$out"/probes/*.csv; do
-      { head -n 5 "$f"; sed -n 6p "$f" | head -c 10; } > "$out/cut.tmp" && mv "$out/cut.tmp" "$f"
+      line=$(sed -n 6p "$f"); cell=${line%%,*}
+      { head -n 5 "$f"; printf '%s' "${cell:0:$(( (${#cell} + 1) / 2 ))}"; } > "$out/cut.tmp" && mv "$out/cut.tmp" "$f"
     done ;;
   no-probes) rm -rf "$out/probes" ;;
+  interrupted)
+    /usr/bin/python3 -c 'import json, sys
+s = json.load(open(sys.argv[1])); s["interrupted"] = {"by": "SIGTERM", "t": s["simulated_time_s"], "step": s["steps"]}
+json.dump(s, open(sys.argv[1], "w"), indent=2)' "$out/summary.json" || exit 99
+    exit 143 ;;
   *) echo "fake sph-run: unknown action '$action' in FAKE_RULES" >&2; exit 99 ;;
 esac
 exit 0

@@ -85,7 +85,22 @@ for bad in "--refine 1,x" "--refine 0,1" "--perturb lambda_c" "--runs 0" "--vary
     set +e; /usr/bin/python3 tools/resolution_study.py scenes/martin_moyce.json $bad --sph-run "$sph_run" \
         --out "$out/bad" > "$out/bad.log" 2>&1; rc=$?; set -e
     [ "$rc" = 2 ] || { echo "'$bad': exit $rc, expected 2"; cat "$out/bad.log"; exit 1; }
-    grep -q "resolution_study: error: ${bad%% *}" "$out/bad.log" || { echo "'$bad':"; cat "$out/bad.log"; exit 1; }
+    grep -q "resolution_study.py: error: ${bad%% *}" "$out/bad.log" || { echo "'$bad':"; cat "$out/bad.log"; exit 1; }
+done
+# An experiment file that is missing or has one column stops the study before any run (exit 2,
+# one line naming the probe and the file), read once for all runs.
+printf 't\n0.1\n0.2\n' > "$out/one_column.csv"
+for file in "$out/one_column.csv" "$out/no_such.csv"; do
+    /usr/bin/python3 -c "
+import json, sys
+s = json.load(open('scenes/martin_moyce.json'))
+s['probes'][0]['experiment']['file'] = sys.argv[2]
+json.dump(s, open(sys.argv[1], 'w'))" "$out/exp.json" "$file"
+    rc=0; /usr/bin/python3 tools/resolution_study.py "$out/exp.json" --runs 1 --refine 0.5 --end 0.01 \
+        --sph-run "$sph_run" --out "$out/exp" > "$out/exp.log" 2>&1 || rc=$?
+    [ "$rc" = 2 ] && [ ! -e "$out/exp" ] && ! grep -q Traceback "$out/exp.log" \
+        && grep -q "^resolution_study.py: error: .*exp.json: probe 'front': experiment file $file: " "$out/exp.log" \
+        || { echo "experiment file $file: exit $rc, expected 2 before any run"; cat "$out/exp.log"; exit 1; }
 done
 echo "resolution_study bad input: ok"
 
@@ -98,7 +113,7 @@ tiny=(scenes/martin_moyce.json --refine 0.5 --runs 3 --end 0.06 --sph-run "$fake
 rc=0; FAKE_RULES='*/f0.5/run1:truncate-summary */f0.5/run2:truncate-probes' \
     /usr/bin/python3 tools/resolution_study.py "${tiny[@]}" --out "$out/u" > "$out/u.log" 2>&1 || rc=$?
 [ "$rc" = 2 ] && ! grep -q Traceback "$out/u.log" \
-    && grep -q "^resolution_study: error: 2 of 3 runs not usable (refine 0.5 run1: unreadable: .*run1/summary.json: not valid JSON" "$out/u.log" \
+    && grep -q "^resolution_study.py: error: 2 of 3 run(s) not usable (refine 0.5 run1: unreadable: .*run1/summary.json: not valid JSON" "$out/u.log" \
     || { echo "unreadable runs: exit $rc, expected 2 and the message"; cat "$out/u.log"; exit 1; }
 /usr/bin/python3 - "$out/u" <<'PY'
 import csv, pathlib, sys
@@ -108,7 +123,7 @@ assert [r["probe"] for r in rows] == ["front", "front_colour", "residual_height"
 for r in rows:
     assert r["runs"] == "1" and r["particles"] == "216" and r["err_min"] == r["err_max"] == r["err_median"], r
     assert r["status"].startswith(f"1 of 3 runs usable; run1: unreadable: {d}/f0.5/run1/summary.json: not valid JSON"), r
-    assert f"; run2: unreadable: {d}/f0.5/run2/probes/" in r["status"] and ".csv: line 6: " in r["status"], r
+    assert f"; run2: unreadable: {d}/f0.5/run2/probes/" in r["status"] and ".csv: line 6: cut short" in r["status"], r
 md = (d / "resolution.md").read_text()
 assert md.count("\n| 9.53 mm |") == 3 and md.count("\n* refine 0.5: 1 of 3 runs usable; run1: unreadable: ") == 3, md
 assert (d / "resolution.png").is_file()
@@ -116,7 +131,7 @@ print("resolution_study unreadable runs: ok")
 PY
 
 # A crash after the first run (the fake kills the tool as the second starts): the table holds
-# the first run's figures, marked as a resolution not finished, and no temporary file.
+# the first run's figures, marked as a resolution not finished.
 rc=0; FAKE_RULES='*/f0.5/run1:kill-tool' /usr/bin/python3 tools/resolution_study.py "${tiny[@]}" --out "$out/k" \
     > "$out/k.log" 2>&1 || rc=$?
 [ "$rc" = 137 ] || { echo "killed study: exit $rc, expected 137"; cat "$out/k.log"; exit 1; }
@@ -128,6 +143,15 @@ assert [(r["probe"], r["runs"], r["status"]) for r in rows] == \
     [(p, "1", "1 of 3 runs run so far") for p in ("front", "front_colour", "residual_height")], rows
 assert all(float(r["err_median"]) > 0 for r in rows), rows
 assert (d / "resolution.md").read_text().count("\n| 9.53 mm |") == 3
-assert not [p for p in d.iterdir() if ".tmp" in p.name], list(d.iterdir())
 print("resolution_study killed after one run: ok")
 PY
+
+# A run sph-run reports failed (the fake exits 3): a row "failed (exit 3)" with no figures, exit 2.
+rc=0; FAKE_RULES='*/f0.5/run0:fail' /usr/bin/python3 tools/resolution_study.py "${tiny[@]}" --runs 1 \
+    --out "$out/f" > "$out/f.log" 2>&1 || rc=$?
+[ "$rc" = 2 ] && ! grep -q Traceback "$out/f.log" \
+    && grep -q "^resolution_study.py: error: 1 of 1 run(s) not usable (refine 0.5 run0: failed (exit 3))" "$out/f.log" \
+    && [ "$(cut -d, -f1,6,21 "$out/f/resolution.csv" | tr -d '\r' | tr '\n' ' ')" = "probe,runs,status$(for p in front front_colour residual_height; do printf ' %s,0,0 of 1 runs usable; run0: failed (exit 3)' $p; done) " ] \
+    && grep -q "^| refine 0.5 | 0 of 1 runs usable; run0: failed (exit 3) |" "$out/f/resolution.md" \
+    || { echo "failed run: exit $rc, expected 2 and a failed row"; cat "$out/f.log" "$out/f/resolution.csv"; exit 1; }
+echo "resolution_study failed run: ok"

@@ -127,7 +127,7 @@ check_refused() {  # expected message, then the arguments
 check_refused "no mode wcsph/bogus for this scene" scenes/martin_moyce.json --no-default-modes --config bogus --out "$out/r"
 check_refused "No closing quotation" scenes/martin_moyce.json --config "global --name 'x" --out "$out/r"
 check_refused "reference-dt 0.0: expected a step > 0 s" scenes/martin_moyce.json --reference-dt 0 --out "$out/r"
-check_refused "reference /nonexistent: no readable summary.json" scenes/martin_moyce.json --reference /nonexistent --out "$out/r"
+check_refused "reference /nonexistent cannot be read: /nonexistent/summary.json: No such file" scenes/martin_moyce.json --reference /nonexistent --out "$out/r"
 check_refused "out /proc/x: cannot create the output folder" scenes/martin_moyce.json --out /proc/x
 check_refused "truncated.json: not a readable JSON scene" "$out/truncated.json" --out "$out/r"
 echo "sph-study bad arguments: ok"
@@ -142,7 +142,7 @@ tiny=(scenes/martin_moyce.json --scale 0.296296 --end 0.02 --sph-run "$fake" --n
 rc=0; FAKE_RULES='*/02_individual:truncate-summary */03_binned:no-probes' \
     "$tools/sph-study" "${tiny[@]}" --out "$out/u" > "$out/ulog" 2>&1 || rc=$?
 [ "$rc" -eq 2 ] && ! grep -q Traceback "$out/ulog" \
-    && grep -q "^sph-study: error: 2 run(s) unreadable (individual: unreadable: .*02_individual/summary.json: not valid JSON" "$out/ulog" \
+    && grep -q "^sph-study: error: 2 run(s) not usable (individual: unreadable: .*02_individual/summary.json: not valid JSON" "$out/ulog" \
     || { echo "unreadable runs: exit $rc, expected 2 and the message"; cat "$out/ulog"; exit 1; }
 /usr/bin/python3 - "$out/u" <<'PY'
 import csv, pathlib, sys
@@ -160,8 +160,8 @@ assert (d / "pareto.png").is_file()
 print("sph-study unreadable runs: ok")
 PY
 
-# The reference run fails: the rows keep their cost columns, the accuracy columns say why they
-# are empty, no Pareto plot; exit 2 with one line.
+# The reference run fails: the rows keep their cost columns, the accuracy columns are empty and
+# "accuracy note" says why, no Pareto plot; exit 2 with one line.
 rc=0; FAKE_RULES='*/reference:fail' "$tools/sph-study" "${tiny[@]}" --out "$out/f" > "$out/flog" 2>&1 || rc=$?
 [ "$rc" -eq 2 ] && ! grep -q Traceback "$out/flog" && [ "$(grep -c "^sph-study: error:" "$out/flog")" -eq 1 ] \
     && grep -q "^sph-study: error: the accuracy columns are unavailable: the reference run failed (exit 3), see .*reference/run.log" "$out/flog" \
@@ -175,7 +175,7 @@ why = f"unavailable: the reference run failed (exit 3), see {d}/reference/run.lo
 for r in rows:
     assert r["status"] == "ok" and float(r["wall_s"]) > 0 and int(r["steps"]) > 0 and float(r["speedup_vs_global"]) > 0, r
     dev = [k for k in r if k.startswith("dev ")]
-    assert dev and all(r[k] == why for k in dev) and r["deviation (mean rel.)"] == why, r
+    assert dev and all(r[k] == "" for k in dev) and r["deviation (mean rel.)"] == "" and r["accuracy note"] == why, r
     float(r["exp err front %"])  # the experiment's column needs no reference: still a number (nan this early)
 md = (d / "study.md").read_text()
 assert f"Reference: {why}." in md and "| global | 315 |" in md and "| unavailable |" in md, md
@@ -184,7 +184,8 @@ print("sph-study failed reference: ok")
 PY
 
 # A crash of the study after its first run (the fake sph-run kills it when the second starts):
-# study.csv and study.md hold the first run's row, complete, and no temporary file is left.
+# study.csv and study.md hold the first run's row, complete. (That no temporary file is left by
+# an interrupted write is tested on write_atomic itself, in tools_plots.sh.)
 rc=0; FAKE_RULES='*/02_individual:kill-tool' "$tools/sph-study" "${tiny[@]}" --out "$out/k" > "$out/klog" 2>&1 || rc=$?
 [ "$rc" -eq 137 ] || { echo "killed study: exit $rc, expected 137"; cat "$out/klog"; exit 1; }
 /usr/bin/python3 - "$out/k" <<'PY'
@@ -192,9 +193,44 @@ import csv, pathlib, sys
 d = pathlib.Path(sys.argv[1])
 rows = list(csv.DictReader(open(d / "study.csv")))
 assert [(r["configuration"], r["status"]) for r in rows] == [("global", "ok")], rows
-assert float(rows[0]["wall_s"]) > 0 and rows[0]["deviation (mean rel.)"].startswith("pending"), rows
+assert float(rows[0]["wall_s"]) > 0 and rows[0]["deviation (mean rel.)"] == "", rows
+assert rows[0]["accuracy note"].startswith("pending: "), rows
 md = (d / "study.md").read_text()
 assert "| global | 315 |" in md and "Partial: 3 of 4 configurations still to run." in md, md
-assert not [p for p in d.iterdir() if ".tmp" in p.name], list(d.iterdir())
 print("sph-study killed after one run: ok")
+PY
+
+# Ctrl-C during the second run (the fake sends the study SIGINT, then sleeps in place of
+# sph-run): the study ends the sleeping child and waits for it, prints "interrupted" and dies by
+# SIGINT (bash sees 130), the tables holding the first run's row.
+rc=0; FAKE_PIDFILE=$out/i.pid FAKE_RULES='*/02_individual:int-tool' "$tools/sph-study" "${tiny[@]}" --out "$out/i" \
+    > "$out/ilog" 2>&1 || rc=$?
+[ "$rc" -eq 130 ] && grep -q "^sph-study: interrupted$" "$out/ilog" && ! grep -q Traceback "$out/ilog" \
+    && [ -s "$out/i.pid" ] && ! kill -0 "$(cat "$out/i.pid")" 2>/dev/null \
+    && [ "$(cut -d, -f1,4 "$out/i/study.csv" | tr -d '\r' | tr '\n' ' ')" = "configuration,status global,ok " ] \
+    || { echo "interrupted study: exit $rc, expected 130, its child (pid $(cat "$out/i.pid" 2>/dev/null)) ended, the global row"
+         ps -o pid,stat,args -p "$(cat "$out/i.pid" 2>/dev/null || echo 1)"; cat "$out/ilog" "$out/i/study.csv"; exit 1; }
+echo "sph-study Ctrl-C: ok"
+
+# The global run fails and the individual one is stopped by SIGTERM (summary.json "interrupted",
+# exit 143): the constant configuration, whose step is global's smallest, is skipped (no silent
+# run at the scene's step), a row saying why; the interrupted run is a marked row, not a result;
+# with no usable adaptive run there is no reference. Exit 2 naming the interrupted run.
+rc=0; FAKE_RULES='*/01_global:fail */02_individual:interrupted' "$tools/sph-study" scenes/martin_moyce.json \
+    --scale 0.296296 --end 0.02 --sph-run "$fake" --no-default-modes --config global --config constant \
+    --config individual --out "$out/c" > "$out/clog" 2>&1 || rc=$?
+[ "$rc" -eq 2 ] && ! grep -q Traceback "$out/clog" && [ ! -e "$out/c/reference" ] \
+    && grep -q "^sph-study: error: the accuracy columns are unavailable: no run finished.*; 1 run(s) not usable (individual: interrupted (SIGTERM at t = 0.02 s))" "$out/clog" \
+    || { echo "failed global: exit $rc, expected 2 and the message"; cat "$out/clog"; exit 1; }
+/usr/bin/python3 - "$out/c" <<'PY'
+import csv, pathlib, sys
+d = pathlib.Path(sys.argv[1])
+rows = {r["configuration"]: r["status"] for r in csv.DictReader(open(d / "study.csv"))}
+assert rows == {"global": "failed (exit 3)", "individual": "interrupted (SIGTERM at t = 0.02 s)",
+                "constant": "skipped: its step is the smallest the global run of wcsph took, and no such run is usable "
+                            "(global: failed (exit 3))"}, rows
+assert not any(p.name.endswith("_constant") for p in d.iterdir()), list(d.iterdir())
+md = (d / "study.md").read_text()
+assert "\n| global | failed (exit 3) |" in md and "\n| constant | skipped: " in md and "\n| individual | interrupted (" in md, md
+print("sph-study constant skipped without a usable global run: ok")
 PY

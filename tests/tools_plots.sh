@@ -230,19 +230,116 @@ for b in bad: print("  expected:", b)
 sys.exit(1 if bad else 0)
 EOF2
 check "mode_table.csv/.md: the unreadable run marked, the other three rows complete" '[ $rc -eq 0 ]'
+# --reuse takes a readable summary.json, but not one sph-run marked "interrupted" (nor the
+# truncated one): those two runs again, the others reused; every row complete now, exit 0.
+"$py" -c 'import json, sys
+s = json.load(open(sys.argv[1])); s["interrupted"] = {"by": "SIGINT", "t": 0.01, "step": 9}
+json.dump(s, open(sys.argv[1], "w"))' "$tmp/mt/scale0.296296_global/summary.json"
+"${mt[@]}" --extra "lv:simulation.stepping.mode=individual,simulation.stepping.lambda_v=0.1" --reuse --out "$tmp/mt" \
+  >"$tmp/mtr.out" 2>"$tmp/mtr.err"; rc=$?
+check "mode_table --reuse: an interrupted summary.json is run again (got $rc)" \
+  '[ $rc -eq 0 ] && grep -q "not reusing .*_global/summary.json: interrupted (SIGINT at t = 0.01 s); running it again" "$tmp/mtr.err" && grep -q "not reusing .*_individual/summary.json: unreadable: " "$tmp/mtr.err" && [ "$(grep -c "^reusing .*_\(constant\|lv\)/summary.json" "$tmp/mtr.err")" -eq 2 ] && ! grep -q interrupted "$tmp/mt/scale0.296296_global/summary.json" && [ "$(cut -d, -f2,21 "$tmp/mt/mode_table.csv" | tr -d "\r" | tr "\n" " ")" = "mode,status constant,ok global,ok individual,ok lv,ok " ]'
 FAKE_RULES='*_individual:kill-tool' "${mt[@]}" --out "$tmp/mtk" >/dev/null 2>&1; rc=$?
 check "mode_table killed at its third run (got $rc): the table has the first two, complete" \
-  '[ $rc -eq 137 ] && [ "$(cut -d, -f2,21 "$tmp/mtk/mode_table.csv" | tr -d "\r" | tr "\n" " ")" = "mode,status constant,ok global,ok " ] && [ -z "$(ls -A "$tmp/mtk" | grep tmp)" ]'
+  '[ $rc -eq 137 ] && [ "$(cut -d, -f2,21 "$tmp/mtk/mode_table.csv" | tr -d "\r" | tr "\n" " ")" = "mode,status constant,ok global,ok " ]'
+# The global run fails: a row "failed (exit 3)", constant (whose step is global's smallest)
+# skipped with the reason, individual complete; exit 2 naming the failed run.
+FAKE_RULES='*_global:fail' "${mt[@]}" --out "$tmp/mtf" >/dev/null 2>"$tmp/mtf.err"; rc=$?
+"$py" - "$tmp/mtf/mode_table.csv" <<'EOF'; rows=$?
+import csv, sys
+rows = [(r["mode"], r["runs"], r["status"]) for r in csv.DictReader(open(sys.argv[1]))]
+want = [("constant", "0", "skipped: its step is the first global run's smallest, and that run is not usable"),
+        ("global", "0", "failed (exit 3)"), ("individual", "1", "ok")]
+if rows != want: print("  expected:", want, "found", rows)
+sys.exit(rows != want)
+EOF
+check "mode_table, global failed: a failed row, constant skipped, individual complete, exit 2 (got $rc)" \
+  '[ $rc -eq 2 ] && [ $rows -eq 0 ] && grep -q "^mode_table.py: error: 1 run(s) not usable (scale 0.296296 global: failed (exit 3))" "$tmp/mtf.err" && grep -q "^| global | failed (exit 3) |" "$tmp/mtf/mode_table.md"'
+# --extra names that share a run folder once spaces become _ are refused before any run.
+"${mt[@]}" --extra "a b:simulation.stepping.lambda_v=0.1" --extra "a_b:simulation.stepping.lambda_v=0.2" --out "$tmp/mt0" 2>"$tmp/mt0.err"; rc=$?
+check "mode_table --extra 'a b' and 'a_b': exit 2 naming both (got $rc)" \
+  '[ $rc -eq 2 ] && [ ! -e "$tmp/mt0" ] && grep -q "^mode_table.py: error: --extra '"'a_b:.*'"': the name '"'a_b'"' and '"'a b'"' share the run folder" "$tmp/mt0.err"'
 bs=("$py" "$src/tools/boundary_sweep.py" --scene "$src/scenes/corner_breaking_dam.json" --scale 0.1 --end 0.01
     --dts 0.001,0.002 --sph-run "$fake")
 FAKE_RULES='*/ihmsen_0.002/run:truncate-probes' "${bs[@]}" --out "$tmp/bs" >"$tmp/bs.out" 2>"$tmp/bs.err"; rc=$?
 check "boundary_sweep, a probe file cut mid-row: exit 2 naming it (got $rc)" \
-  '[ $rc -eq 2 ] && ! grep -q Traceback "$tmp/bs.err" && grep -q "^boundary_sweep.py: error: 1 run(s) unreadable (ihmsen Δt 0.002: .*ihmsen_0.002/run/probes/fluid.csv: line 6: " "$tmp/bs.err"'
+  '[ $rc -eq 2 ] && ! grep -q Traceback "$tmp/bs.err" && grep -q "^boundary_sweep.py: error: 1 run(s) not usable (ihmsen Δt 0.002: unreadable: .*ihmsen_0.002/run/probes/fluid.csv: line 6: cut short" "$tmp/bs.err"'
 check "boundary_sweep.md: that row marked, the other three completed" \
-  '[ "$(grep -c "| completed |" "$tmp/bs/boundary_sweep.md")" -eq 3 ] && grep -q "^| ihmsen | 0.002 | unreadable: .*fluid.csv: line 6: " "$tmp/bs/boundary_sweep.md" && grep -q "ihmsen: whole fluid 0.001, interior 0.001 (a run was unreadable: a lower bound)" "$tmp/bs/boundary_sweep.md"'
+  '[ "$(grep -c "| completed |" "$tmp/bs/boundary_sweep.md")" -eq 3 ] && grep -q "^| ihmsen | 0.002 | unreadable: .*fluid.csv: line 6: " "$tmp/bs/boundary_sweep.md" && grep -q "ihmsen: whole fluid 0.001, interior 0.001 (a run was unreadable or interrupted: a lower bound)" "$tmp/bs/boundary_sweep.md"'
 FAKE_RULES='*/direct_forcing_0.001/run:kill-tool' "${bs[@]}" --out "$tmp/bsk" >/dev/null 2>&1; rc=$?
 check "boundary_sweep killed at its third run (got $rc): boundary_sweep.md has the first two rows" \
   '[ $rc -eq 137 ] && [ "$(grep -c "^| ihmsen | 0.00[12] | completed |" "$tmp/bsk/boundary_sweep.md")" -eq 2 ] && ! grep -q "^| direct_forcing" "$tmp/bsk/boundary_sweep.md"'
+
+# 7. sph_python's shared pieces on their own: write_atomic interrupted at its rename leaves the
+#    old table and no temporary, and removes a temporary an earlier (killed) writer left; a CSV
+#    whose last line has no newline (cut short at a cell boundary) is unreadable; Markdown cells
+#    escape |; a run is classified failed / interrupted / unreadable / usable; Ctrl-C and SIGTERM
+#    end a tool by that signal after ending and waiting for its child; a CSV error exits 2.
+"$py" - "$tmp/unit" <<'EOF'; rc=$?
+import os, pathlib, signal, subprocess, sys
+import sph_python as sp
+d = pathlib.Path(sys.argv[1]); d.mkdir()
+bad = []
+def expect(cond, what):
+    if not cond: bad.append(what)
+t = d / "t.md"
+t.write_text("old\n")
+(d / ".t.md.tmp1").write_text("left by a killed writer")
+real = os.replace
+def interrupted(*a): raise KeyboardInterrupt
+os.replace = interrupted
+try:
+    sp.write_atomic(t, "new\n")
+    bad.append("write_atomic: the KeyboardInterrupt of os.replace goes on")
+except KeyboardInterrupt:
+    pass
+finally:
+    os.replace = real
+expect(t.read_text() == "old\n", f"the old table intact after an interrupted write, found {t.read_text()!r}")
+expect(sorted(p.name for p in d.iterdir()) == ["t.md"], f"no temporary left, found {sorted(p.name for p in d.iterdir())}")
+sp.write_atomic(t, "new\n")
+expect(t.read_text() == "new\n", "write_atomic writes")
+c = d / "cut.csv"
+c.write_text("t,x\n0,1\n0.1,2")  # cut after a whole cell: every row has its two numbers
+try:
+    sp.read_csv_columns(c)
+    bad.append("a CSV without its final newline is Unreadable")
+except sp.Unreadable as e:
+    expect(str(e) == f"{c}: line 3: cut short (the file ends inside it, without a newline)", f"message: {e}")
+expect(sp.read_csv_columns(c, final_newline=False) == {"t": [0.0, 0.1], "x": [1.0, 2.0]}, "final_newline=False reads it")
+expect(sp.md_cell("a|b") == "a\\|b" and sp.md_status_row("x|y", "failed (exit 3)", 4) == "| x\\|y | failed (exit 3) | | |",
+       f"Markdown escaping: {sp.md_status_row('x|y', 'failed (exit 3)', 4)!r}")
+r = d / "run"; r.mkdir()
+(r / "summary.json").write_text('{"steps": 9, "interrupted": {"by": "SIGTERM", "t": 0.5, "step": 9}}\n')
+expect(sp.read_run(r, 143) == (None, "interrupted (SIGTERM at t = 0.5 s)"), f"exit 143: {sp.read_run(r, 143)}")
+expect(sp.read_run(r, 0) == (None, "interrupted (SIGTERM at t = 0.5 s)"), f"exit 0, marked: {sp.read_run(r, 0)}")
+expect(sp.read_run(r, 3) == (None, "failed (exit 3)"), f"exit 3: {sp.read_run(r, 3)}")
+(r / "summary.json").write_text('{"steps": 9}\n')
+expect(sp.read_run(r, 0, numbers=("steps",)) == ({"steps": 9}, None), "a usable run")
+expect(sp.read_run(r, 0, numbers=("wall_time_s",))[1] == f'unreadable: {r}/summary.json: no "wall_time_s"', "unreadable")
+# A tool (errors_as_exit_2) stopped while its child runs: the child ended and waited for, the
+# tool dead by the signal (the shell's 130 / 143), one line.
+tool = ("import os, signal, sys, threading\nimport sph_python as sp\nsp.errors_as_exit_2()\n"
+        "threading.Timer(0.5, os.kill, (os.getpid(), getattr(signal, sys.argv[2]))).start()\n"
+        "sp.run_child(['bash', '-c', 'echo $$ > ' + sys.argv[1] + '; exec sleep 30'], os.devnull)\n")
+for sig, line in (("SIGINT", "-c: interrupted"), ("SIGTERM", "-c: interrupted (SIGTERM)")):
+    p = subprocess.run([sys.executable, "-c", tool, str(d / "child.pid"), sig], capture_output=True, text=True)
+    expect(p.returncode == -getattr(signal, sig) and p.stderr.strip().endswith(line),
+           f"{sig}: died by it with '{line}', found {p.returncode}, {p.stderr.strip()!r}")
+    pid = int((d / "child.pid").read_text())
+    try:
+        os.kill(pid, 0)
+        bad.append(f"{sig}: the tool's child {pid} ended")
+    except ProcessLookupError:
+        pass
+p = subprocess.run([sys.executable, "-c", "import csv, sys, sph_python as sp\nsp.errors_as_exit_2()\n"
+                    "raise csv.Error('bad quoting')"], capture_output=True, text=True)
+expect(p.returncode == 2 and p.stderr == "-c: error: an input file is not valid CSV: bad quoting\n",
+       f"csv.Error: exit 2, one line; found {p.returncode} {p.stderr!r}")
+for b in bad: print("  expected:", b)
+sys.exit(1 if bad else 0)
+EOF
+check "sph_python: write_atomic interrupted, a CSV cut short, Markdown cells, runs classified, tools ended by Ctrl-C/SIGTERM" '[ $rc -eq 0 ]'
 
 [ $fail -eq 0 ] && echo "tools plots: all checks passed"
 exit $fail

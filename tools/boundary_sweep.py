@@ -16,21 +16,22 @@ Prints a Markdown table; writes boundary_sweep.md.
 When and failures. boundary_sweep.md is rewritten after every run (into a temporary file in
 --out, then renamed onto it: never half-written), so an interrupted or crashed sweep keeps the
 rows of the runs it finished. A run sph-run reports failed is a row "failed (exit N)", as a step
-too large; a run that exits 0 but whose summary.json or probes/fluid.csv cannot be read (missing,
-truncated, not JSON or CSV) is a row "unreadable: <file>: <reason>" and ends its handling's sweep
-like a failed step (the largest Δt found is then a lower bound). Exit codes: 0 every run readable
-(failed steps included); 2 bad arguments, or, after writing the table, a run unreadable (one
-line, `boundary_sweep.py: error: ...`); 130 interrupted (Ctrl-C).
+too large; a run stopped by a signal ("interrupted (...)") or that exits 0 but whose summary.json
+or probes/fluid.csv cannot be read (missing, truncated, not JSON or CSV: "unreadable: <file>:
+<reason>") is a marked row and ends its handling's sweep like a failed step (the largest Δt found
+is then a lower bound). Every run's output goes to its run.log. Exit codes: 0 every run readable
+(failed steps included); 2 bad arguments, or, after writing the table, a run unreadable or
+interrupted (one line, `boundary_sweep.py: error: ...`); 130 / 143 interrupted (Ctrl-C /
+SIGTERM: the running sph-run is stopped and waited for).
 """
 import argparse
 import json
 import pathlib
 import statistics
-import subprocess
 import sys
 import time
-from sph_python import Unreadable, errors_as_exit_2, positive_list, read_csv_columns, read_json_object, reading, \
-    require, write_atomic  # noqa: E402 (tools/ is the script's folder)
+from sph_python import errors_as_exit_2, exit_if_unusable, log_tail, md_cell, positive_list, read_csv_columns, \
+    require, sph_run, write_atomic  # noqa: E402 (tools/ is the script's folder)
 
 errors_as_exit_2()
 
@@ -49,7 +50,7 @@ require(args.eta > 0, f"--eta {args.eta}: expected a fraction > 0")
 out_root = pathlib.Path(args.out)
 out_root.mkdir(parents=True, exist_ok=True)
 rows = []
-unreadable = []  # "<handling> Δt <dt>: <file>: <reason>"
+unusable = []  # "<handling> Δt <dt>: unreadable: <file>: <reason>" (or interrupted)
 best = {}        # handling -> largest dt passing on the whole-fluid average (the paper's measure)
 best_inner = {}  # handling -> largest dt passing on the interior average (no wall within h)
 scene = json.loads(pathlib.Path(args.scene).read_text())
@@ -64,14 +65,14 @@ def table():
              "| boundary | Δt (s) | outcome | max(ρ_err_avg) | below 1 % | max(ρ_err_avg), interior | below 1 % | interior particles (median) | max ρ_err |",
              "|---|---|---|---|---|---|---|---|---|"]
     for h, dt, st, err, ok, inner, ok_inner, inner_n, err_max, _ in rows:
-        lines.append(f"| {h} | {dt:g} | {st.replace('|', chr(92) + '|')} | {100 * err:.2f} % | {'yes' if ok else 'no'} | "
+        lines.append(f"| {h} | {dt:g} | {md_cell(st)} | {100 * err:.2f} % | {'yes' if ok else 'no'} | "
                      f"{100 * inner:.2f} % | {'yes' if ok_inner else 'no'} | {inner_n:.0f} | {100 * err_max:.2f} % |")
     lines.append("")
     for h in ("ihmsen", "direct_forcing"):
         lines.append(f"largest Δt below {100 * args.eta:g} %: {h}: whole fluid {best.get(h, 'none of the steps tried')}, "
                      f"interior {best_inner.get(h, 'none of the steps tried')}"
-                     + (" (a run was unreadable: a lower bound)" if any(r[0] == h and r[2].startswith("unreadable")
-                                                                          for r in rows) else ""))
+                     + (" (a run was unreadable or interrupted: a lower bound)" if any(
+                         r[0] == h and r[2].startswith(("unreadable", "interrupted")) for r in rows) else ""))
     return "\n".join(lines) + "\n"
 for handling in ("ihmsen", "direct_forcing"):
     failed_whole = failed_inner = False
@@ -88,24 +89,24 @@ for handling in ("ihmsen", "direct_forcing"):
                str(args.threads), "--no-frames", "-q", "--out", str(out / "run"), "--mode", "constant", "--dt", repr(dt),
                "--set", f"boundary.handling={handling}", "--set", "pcisph.iterations=3", "--set", "pcisph.loop=fixed"]
         print(f"[{time.strftime('%H:%M:%S')}] {' '.join(cmd)}", file=sys.stderr, flush=True)
-        p = subprocess.run(cmd, capture_output=True, text=True)
+        result, status = sph_run(cmd, out / "run",
+                                 numbers=("max_avg_density_error", "max_density_error", "fluid_particles"),
+                                 then=lambda s: (s, read_csv_columns(out / "run" / "probes" / "fluid.csv",
+                                                                     ("rho_err_avg_interior", "interior_count"),
+                                                                     min_rows=1)))
         err = err_max = inner = inner_n = float("nan")
-        status, fluid = f"failed (exit {p.returncode})", 0
-        if p.returncode == 0:
-            try:
-                s = read_json_object(out / "run" / "summary.json",
-                                     numbers=("max_avg_density_error", "max_density_error", "fluid_particles"))
-                with reading(out / "run" / "probes" / "fluid.csv"):
-                    probe = read_csv_columns(out / "run" / "probes" / "fluid.csv",
-                                             ("rho_err_avg_interior", "interior_count"), min_rows=1)
-                err, err_max, status = s["max_avg_density_error"], s["max_density_error"], "completed"
-                inner = max(probe["rho_err_avg_interior"])
-                inner_n = statistics.median(probe["interior_count"])
-                fluid = s["fluid_particles"]
-            except Unreadable as e:
-                status = f"unreadable: {e}"
-                unreadable.append(f"{handling} Δt {dt:g}: {e}")
-                print(f"boundary_sweep.py: {status}", file=sys.stderr, flush=True)
+        fluid = 0
+        if status is None:
+            s, probe = result
+            err, err_max, status = s["max_avg_density_error"], s["max_density_error"], "completed"
+            inner = max(probe["rho_err_avg_interior"])
+            inner_n = statistics.median(probe["interior_count"])
+            fluid = s["fluid_particles"]
+        elif status.startswith("failed"):
+            print(f"boundary_sweep.py: run {status}:\n{log_tail(out / 'run')}", file=sys.stderr, flush=True)
+        else:
+            unusable.append(f"{handling} Δt {dt:g}: {status}")
+            print(f"boundary_sweep.py: {status}", file=sys.stderr, flush=True)
         ok, ok_inner = status == "completed" and err < args.eta, status == "completed" and inner < args.eta
         rows.append((handling, dt, status, err, ok, inner, ok_inner, inner_n, err_max, fluid))
         if ok and not failed_whole:
@@ -120,5 +121,4 @@ for handling in ("ihmsen", "direct_forcing"):
 text = table()
 write_atomic(out_root / "boundary_sweep.md", text)
 print(text)
-require(not unreadable, f"{len(unreadable)} run(s) unreadable ({'; '.join(unreadable)}); "
-                        f"{out_root / 'boundary_sweep.md'} has every other row")
+exit_if_unusable(unusable, f"{out_root / 'boundary_sweep.md'}")

@@ -13,29 +13,33 @@ are deterministic (same steps and results each time); only the times vary.
 
 The `constant` run uses the smallest step the `global` run of the same size took (its
 `min_dt_s`), i.e. the largest fixed step known to be stable for the whole run, which is how
-a user without adaptivity would have to choose it. Each run's outputs stay in --out/<size>_<mode>/.
-Prints a Markdown table and writes mode_table.md and mode_table.csv into --out.
+a user without adaptivity would have to choose it. Each run's outputs (and its run.log) stay in
+--out/scale<S>_<name>/ (the name with spaces as `_` and brackets dropped: two --extra names that
+give the same folder are refused). Prints a Markdown table and writes mode_table.md and
+mode_table.csv into --out.
 
 When and failures. mode_table.md and mode_table.csv are rewritten after every run (into a
 temporary file in --out, then renamed onto the table: never half-written), so an interrupted or
 crashed table keeps the configurations run so far (medians over the runs so far). A run sph-run
-reports failed, or whose summary.json cannot be read, is left out of its row's medians and named
-in the row's `status` (CSV) and under the table: "failed (exit N)", "unreadable: <file>:
-<reason>"; a configuration with no usable run is a row with only that status, and without a usable
-first `global` run the `constant` one is skipped. Exit codes: 0 every run usable; 2 bad
-arguments (a malformed --extra, say), before any run, or, after writing the tables, a run failed
-or unreadable (one line, `mode_table.py: error: ...`); 130 interrupted (Ctrl-C).
+reports failed, stopped by a signal, or whose summary.json cannot be read, is left out of its
+row's medians and named in the row's `status` (CSV) and under the table: "failed (exit N)",
+"interrupted (<signal> at t = T s)", "unreadable: <file>: <reason>"; a configuration with no
+usable run is a row with only that status, and without a usable first `global` run the
+`constant` one is skipped. --reuse takes a summary.json only if it is readable and not marked
+"interrupted"; any other is run again. Exit codes: 0 every run usable; 2 bad arguments (a
+malformed --extra, say), before any run, or, after writing the tables, a run not usable (one
+line, `mode_table.py: error: ...`); 130 / 143 interrupted (Ctrl-C / SIGTERM: the running sph-run
+is stopped and waited for).
 """
 import argparse
 import os
 import pathlib
 import platform
-import subprocess
 import statistics
 import sys
 import time
-from sph_python import Unreadable, csv_text, errors_as_exit_2, positive_list, read_json_object, require, \
-    write_atomic  # noqa: E402 (tools/ is the script's folder)
+from sph_python import csv_text, errors_as_exit_2, exit_if_unusable, log_tail, md_cell, md_status_row, positive_list, \
+    read_run, require, sph_run, write_atomic  # noqa: E402 (tools/ is the script's folder)
 
 errors_as_exit_2()
 
@@ -49,8 +53,8 @@ ap.add_argument("--repeat", type=int, default=1, help="runs per configuration, i
 ap.add_argument("--sph-run", default="build/tools/sph-run")
 ap.add_argument("--out", default="out/mode_table")
 ap.add_argument("--reuse", action="store_true",
-                help="read a run's summary.json from --out if it is there and readable instead of running it "
-                     "again (re-tabulates an earlier or interrupted table with the same options)")
+                help="read a run's summary.json from --out if it is there, readable and not marked interrupted "
+                     "instead of running it again (re-tabulates an earlier or interrupted table with the same options)")
 ap.add_argument("--extra", action="append", default=[],
                 help="an extra configuration NAME:KEY=VALUE[,KEY=VALUE...], e.g. 'individual(global λ):"
                      "simulation.stepping.mode=individual,simulation.stepping.lambda_v=0.1'")
@@ -77,9 +81,20 @@ def parse_extra(spec, taken):
     return name, sets
 
 
+def folder(name):
+    """A configuration's run folder name (under --out/scale<S>_)."""
+    return name.replace(' ', '_').replace('(', '').replace(')', '')
+
+
 EXTRAS = []
+folders = {folder(n): n for n in ("global", "constant", "individual")}
 for spec in args.extra:  # refused before any run
     EXTRAS.append(parse_extra(spec, {"global", "constant", "individual"} | {n for n, _ in EXTRAS}))
+    name = EXTRAS[-1][0]
+    require(folder(name) not in folders, f"--extra {spec!r}: the name {name!r} and {folders.get(folder(name))!r} "
+                                         f"share the run folder scale<S>_{folder(name)} (spaces become '_', brackets "
+                                         f"are dropped): give them names that differ otherwise")
+    folders[folder(name)] = name
 
 require(pathlib.Path(args.sph_run).exists(), f"{args.sph_run}: not found (build first: cmake --build build)")
 out_root = pathlib.Path(args.out)
@@ -89,9 +104,9 @@ SUMMARY_NUMBERS = ("wall_time_s", "steps", "fluid_particles", "simulated_time_s"
 
 
 def run(tag, scale, sets, rep=0):
-    """(summary, None) of a run, or (None, "failed (exit N)" / "unreadable: <file>: <reason>")."""
-    name = tag.replace(' ', '_').replace('(', '').replace(')', '')
-    out = out_root / f"scale{scale:g}_{name}" / f"run{rep}" if args.repeat > 1 else out_root / f"scale{scale:g}_{name}"
+    """(summary, None) of a run, or (None, "failed (exit N)" / "interrupted (...)" / "unreadable: <file>: <reason>")."""
+    out = out_root / f"scale{scale:g}_{folder(tag)}"
+    out = out / f"run{rep}" if args.repeat > 1 else out
     cmd = [args.sph_run, args.scene, "--scale", str(scale), "--threads", str(args.threads), "--no-frames", "-q",
            "--out", str(out)]
     if args.end is not None:
@@ -99,22 +114,16 @@ def run(tag, scale, sets, rep=0):
     for s in sets:
         cmd += ["--set", s]
     if args.reuse and (out / "summary.json").exists():
-        try:
-            s = read_json_object(out / "summary.json", numbers=SUMMARY_NUMBERS, keys=("scene",))
+        s, status = read_run(out, numbers=SUMMARY_NUMBERS, keys=("scene",))
+        if not status:
             print(f"reusing {out / 'summary.json'}", file=sys.stderr, flush=True)
             return s, None
-        except Unreadable as e:
-            print(f"not reusing {e}: running it again", file=sys.stderr, flush=True)
+        print(f"not reusing {out / 'summary.json'}: {status}; running it again", file=sys.stderr, flush=True)
     print(f"[{time.strftime('%H:%M:%S')}] {' '.join(cmd)}", file=sys.stderr, flush=True)
-    proc = subprocess.run(cmd, capture_output=True, text=True)
-    if proc.returncode != 0:
-        print(f"run failed (exit {proc.returncode}): {' '.join(cmd)}\n{proc.stderr.strip()}", file=sys.stderr, flush=True)
-        return None, f"failed (exit {proc.returncode})"
-    try:
-        return read_json_object(out / "summary.json", numbers=SUMMARY_NUMBERS, keys=("scene",)), None
-    except Unreadable as e:
-        print(f"unreadable: {e}", file=sys.stderr, flush=True)
-        return None, f"unreadable: {e}"
+    s, status = sph_run(cmd, out, numbers=SUMMARY_NUMBERS, keys=("scene",))
+    if status:
+        print(f"run {status}: {' '.join(cmd)}\n{log_tail(out)}", file=sys.stderr, flush=True)
+    return s, status
 
 
 def fronts(s):
@@ -176,9 +185,9 @@ def tabulate(sizes):
              "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         if not r["runs"]:
-            lines.append(f"| {r['mode']} | {r['status'].replace('|', chr(92) + '|')} |" + " |" * 11)
+            lines.append(md_status_row(r["mode"], r["status"], 13))
             continue
-        lines.append(f"| {r['mode']} | {r['particles']:,} | {r['simulated_s']:.2f} | {r['wall_s']:.1f} | {r['cpu_s']:.1f} | {r['steps']:,} | "
+        lines.append(f"| {md_cell(r['mode'])} | {r['particles']:,} | {r['simulated_s']:.2f} | {r['wall_s']:.1f} | {r['cpu_s']:.1f} | {r['steps']:,} | "
                      f"{r['avg_dt_ms']:.3f} ({r['min_dt_ms']:.3f}–{r['max_dt_ms']:.3f}) | {r['avg_active_pct']:.0f} % | "
                      f"{r['max_density_error_pct']:.1f} % | {r['front_x_m']} at {r['front_t_s']} | {r['front_dev_vs_global_pct']:.1f} % | {r['collisions']} | "
                      f"{r['speedup_vs_global']:.2f}, {r['speedup_vs_global_cpu']:.2f} ({r['speedup_vs_constant']:.2f}) |")
@@ -188,7 +197,7 @@ def tabulate(sizes):
     # runs of a configuration); a system a configuration does not build shows a dash.
     for scale, order, table in system_tables:
         lines += ["", f"Milliseconds per step by system (scale {scale:g}; median over the runs; `step` is their sum):", "",
-                  "| system | " + " | ".join(order) + " |", "|---|" + "---|" * len(order)]
+                  "| system | " + " | ".join(md_cell(n) for n in order) + " |", "|---|" + "---|" * len(order)]
         for sy, by in table.items():
             lines.append(f"| {sy} | " + " | ".join(f"{by[n]:.2f}" if n in by else "–" for n in order) + " |")
         lines.append("| **step** | " + " | ".join(f"**{sum(by.get(n, 0.0) for by in table.values()):.2f}**" for n in order) + " |")
@@ -240,6 +249,5 @@ for scale in SCALES:
 
 text = write_tables(sizes)
 print(text)
-bad = [f"scale {scale:g} {name}: {p}" for scale, _, _, problems, _ in sizes for name, ps in problems.items() for p in ps]
-require(not bad, f"{len(bad)} run(s) not usable ({'; '.join(bad)}); {out_root / 'mode_table.md'} and mode_table.csv "
-                 f"have every other figure")
+exit_if_unusable([f"scale {scale:g} {name}: {p}" for scale, _, _, problems, _ in sizes for name, ps in problems.items()
+                  for p in ps], f"{out_root / 'mode_table.md'} and mode_table.csv")

@@ -33,21 +33,23 @@ When and failures. resolution.md and resolution.csv are rewritten after every ru
 temporary file in --out, then renamed onto the table: never half-written), so an interrupted or
 crashed study keeps the figures of the runs it finished; a resolution whose runs are not all done
 yet has the status "k of N runs run so far". resolution.png is drawn at the end. A run sph-run
-reports failed ("failed (exit N)"), or whose summary.json or probe files cannot be read
-("unreadable: <file>: <reason>"), is left out of its resolution's figures and named in the row's
-`status` (CSV) and under the table; a resolution with no usable run is a row with only that
-status. Exit codes: 0 every run usable; 2 bad arguments, before any run, or, after writing the
-tables, a run failed or unreadable (one line, `resolution_study: error: ...`); 130 interrupted.
+reports failed ("failed (exit N)"), stopped by a signal ("interrupted (...)"), or whose
+summary.json or probe files cannot be read ("unreadable: <file>: <reason>"), is left out of its
+resolution's figures and named in the row's `status` (CSV) and under the table; a resolution
+with no usable run is a row with only that status. Every run's output goes to its run.log. The
+experiments' files are read once, before any run. Exit codes: 0 every run usable; 2 bad
+arguments or an experiment file that cannot be read, before any run, or, after writing the
+tables, a run not usable (one line, `resolution_study.py: error: ...`); 130 / 143 interrupted
+(Ctrl-C / SIGTERM: the running sph-run is stopped and waited for).
 """
 import argparse
 import datetime
 import json
 import pathlib
-import subprocess
 import sys
 import time
 
-from sph_python import Unreadable, csv_text, errors_as_exit_2, need, read_json_object, \
+from sph_python import csv_text, errors_as_exit_2, exit_if_unusable, fail, log_tail, md_status_row, need, sph_run, \
     write_atomic  # noqa: E402 (tools/ is the script's folder)
 errors_as_exit_2()
 
@@ -56,10 +58,7 @@ import numpy as np  # noqa: E402
 
 HERE = pathlib.Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
-import sph_study  # noqa: E402
-from sph_study import experiment_series, fail, full_key, machine, shifted_error, source_commit  # noqa: E402
-
-sph_study.PROG = "resolution_study"
+from sph_study import experiment_series, full_key, machine, read_experiments, shifted_error, source_commit  # noqa: E402
 
 
 def parse_perturb(spec):
@@ -121,10 +120,11 @@ def main():
     values = [0.5 * (lo + hi)] if args.runs == 1 else list(np.linspace(lo, hi, args.runs))
     base_scale = float(scene.get("simulation", {}).get("scale", 1.0))
     out = pathlib.Path(args.out or f"out/resolution/{scene.get('name', scene_path.stem)}")
+    sph_run_path = pathlib.Path(args.sph_run)
+    if not sph_run_path.exists():
+        fail(f"{sph_run_path}: not found (build the project first, or pass --sph-run)")
+    measured = read_experiments(scene_path, probes)  # once, before any run: a bad file stops the study now
     out.mkdir(parents=True, exist_ok=True)
-    sph_run = pathlib.Path(args.sph_run)
-    if not sph_run.exists():
-        fail(f"{sph_run}: not found (build the project first, or pass --sph-run)")
 
     started = time.time()
     runs = {}      # factor -> [(run dir, summary, {probe name: experiment_series(...)})] of the usable runs
@@ -134,7 +134,7 @@ def main():
         runs[f], problems[f] = [], []
         for k, v in enumerate(values):
             d = out / f"f{f:g}" / f"run{k}"
-            cmd = [str(sph_run), str(scene_path), "--scale", repr(base_scale * f ** 3), "--threads",
+            cmd = [str(sph_run_path), str(scene_path), "--scale", repr(base_scale * f ** 3), "--threads",
                    str(args.threads), "--no-frames", "-q", "--out", str(d), "--set", f"{key}={v!r}"]
             if args.mode:
                 cmd += ["--mode", args.mode]
@@ -148,22 +148,14 @@ def main():
             print(f"[{n}/{total}] refine {f:g}{''.join(', ' + s for s in per_factor[f])}, {key} = {v:.4g} ...",
                   end=" ", flush=True)
             t0 = time.time()
-            r = subprocess.run(cmd, capture_output=True, text=True)
-            problem = None
-            if r.returncode != 0:
-                problem = f"failed (exit {r.returncode})"
-                print(f"{problem}: {' '.join(cmd)}\n{r.stderr.strip()}", flush=True)
-            else:
-                try:
-                    summary = read_json_object(d / "summary.json",
-                                               numbers=("fluid_particles", "kept_steps", "physics.particle_radius"))
-                    series = {p["name"]: experiment_series(d, p, scene_path.parent) for p in probes}
-                except Unreadable as e:
-                    problem = f"unreadable: {e}"
-                    print(problem, flush=True)
+            result, problem = sph_run(cmd, d, numbers=("fluid_particles", "kept_steps", "physics.particle_radius"),
+                                      then=lambda s: (s, {p["name"]: experiment_series(d, p, measured[p["name"]])
+                                                          for p in probes}))
             if problem:
+                print(f"{problem}: {' '.join(cmd)}\n{log_tail(d)}", flush=True)
                 problems[f].append(f"run{k}: {problem}")
             else:
+                summary, series = result
                 print(f"{summary['fluid_particles']:,} particles, {summary['kept_steps']:,} steps, "
                       f"{time.time() - t0:.1f} s", flush=True)
                 runs[f].append((d, summary, series))
@@ -178,10 +170,8 @@ def main():
         plot(out / "resolution.png", probes, factors, rows, curves, runs, scene_path)
         wrote.append(out / "resolution.png")
     print("wrote " + ", ".join(str(w) for w in wrote))
-    bad = [f"refine {f:g} {p}" for f in factors for p in problems[f]]
-    if bad:
-        fail(f"{len(bad)} of {total} runs not usable ({'; '.join(bad)}); {out / 'resolution.csv'} and "
-             f"resolution.md have the figures of the others")
+    exit_if_unusable([f"refine {f:g} {p}" for f in factors for p in problems[f]],
+                     f"{out / 'resolution.csv'} and resolution.md", total=total)
 
 
 COLUMNS = ["probe", "refine", "spacing_m", "length_per_spacing", "particles", "runs", "steps_median", "err_median",
@@ -267,7 +257,7 @@ def write_tables(out, rows, probes, scene_path, args, key, lo, hi, started):
         mine = [r for r in rows if r["probe"] == p["name"]]
         for r in mine:
             if not r["runs"]:
-                lines.append(f"| refine {r['refine']:g} | {r['status'].replace('|', chr(92) + '|')} |" + " |" * 8)
+                lines.append(md_status_row(f"refine {r['refine']:g}", r["status"], 10))
                 continue
             lines.append(
                 f"| {1e3 * r['spacing_m']:.3g} mm | {r['length_per_spacing']:.1f} | {r['particles']:,} | "

@@ -4,10 +4,14 @@ A missing module is the common case of a Python other than Debian's (pyenv, cond
 first on PATH: then the tool runs itself again with Debian's /usr/bin/python3 when that one
 has the module, and otherwise stops with exit 2 saying which package to install.
 
-Also the tools' shared handling of bad input and of their tables: `require`, `positive_list`,
-`usage_unless` and `errors_as_exit_2` (exit 2 with one line), `Unreadable` and the readers of a
-run's outputs that raise it (`read_json_object`, `read_csv_columns`, `reading`), and
-`write_atomic` (a table that is always complete on disk)."""
+Also the tools' shared handling of bad input and of their tables: `fail`, `require`,
+`positive_list`, `usage_unless` and `errors_as_exit_2` (exit 2 with one line; Ctrl-C and SIGTERM
+end the tool by that signal), `Unreadable` and the readers of a run's outputs that raise it
+(`read_json_object`, `read_csv_columns`, `reading`), `write_atomic` (a table that is always
+complete on disk), and what the study tools share about a run of sph-run: `run_child` (a child
+never outlives its tool), `sph_run` and `read_run` (a run is usable, or "failed (exit N)",
+"interrupted (...)" or "unreadable: <file>: <reason>"), `md_cell`/`md_status_row` and
+`exit_if_unusable`."""
 import contextlib
 import csv
 import importlib.util
@@ -15,6 +19,8 @@ import io
 import json
 import os
 import pathlib
+import signal
+import subprocess
 import sys
 
 _DEBIAN = "/usr/bin/python3"
@@ -37,30 +43,59 @@ def need(*modules):
     sys.exit(2)
 
 
+class Stopped(KeyboardInterrupt):
+    """SIGTERM, raised where the tool is as Ctrl-C raises KeyboardInterrupt (errors_as_exit_2
+    installs the handler), so that both unwind the same way: a running child is ended and
+    waited for (run_child), then the tool dies by the signal."""
+    signum = signal.SIGTERM
+
+
+def _raise_stopped(signum, frame):
+    raise Stopped()
+
+
+def die_by(signum):
+    """End the process by `signum` with its default action, as shells expect of a program
+    stopped by a signal (a calling loop sees 128 + signum and stops too): output flushed first."""
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(Exception):
+            stream.flush()
+    signal.signal(signum, signal.SIG_DFL)
+    os.kill(os.getpid(), signum)
+    os._exit(128 + signum)  # not reached: the signal's default action ends the process
+
+
 def errors_as_exit_2():
     """Bad input as the project's tools report it: a file that cannot be read or written
-    (OSError) or parsed (JSON, CSV: ValueError from the parsers) ends the tool with one line,
-    `<tool>: error: <what>`, and exit code 2, instead of a traceback; so does an `Unreadable`
-    output of a run. Ctrl-C (KeyboardInterrupt) ends it with `<tool>: interrupted` and exit 130,
-    as shells expect. Other exceptions (bugs) keep Python's traceback and exit 1."""
+    (OSError) or parsed (JSON or text: JSONDecodeError, UnicodeDecodeError; CSV: csv.Error, and
+    `Unreadable`, which read_csv_columns and the readers of a run's outputs raise) ends the tool
+    with one line, `<tool>: error: <what>`, and exit code 2, instead of a traceback. Ctrl-C
+    (KeyboardInterrupt) and SIGTERM (raised as `Stopped`) end it with `<tool>: interrupted` and
+    then by that signal itself (the shell sees 130 or 143). Other exceptions (bugs, a ValueError
+    of a computation among them) keep Python's traceback and exit 1."""
     default = sys.excepthook
 
     def hook(kind, value, tb):
         if issubclass(kind, BrokenPipeError):  # the reader went away (`| head`): nothing to report
             sys.exit(0)
         if issubclass(kind, KeyboardInterrupt):
-            print(f"{_tool()}: interrupted", file=sys.stderr)
-            sys.exit(130)
+            signum = getattr(value, "signum", signal.SIGINT)
+            print(f"{_tool()}: interrupted" + ("" if signum == signal.SIGINT else f" ({signal.Signals(signum).name})"),
+                  file=sys.stderr)
+            die_by(signum)
         if issubclass(kind, Unreadable):
-            require(False, str(value))
+            fail(str(value))
         if issubclass(kind, OSError):
             where = f"{value.filename}: " if getattr(value, "filename", None) else ""
-            require(False, f"{where}{value.strerror or value}")
+            fail(f"{where}{value.strerror or value}")
         elif issubclass(kind, (json.JSONDecodeError, UnicodeDecodeError)):
-            require(False, f"an input file is not valid JSON or text: {value}")
+            fail(f"an input file is not valid JSON or text: {value}")
+        elif issubclass(kind, csv.Error):
+            fail(f"an input file is not valid CSV: {value}")
         default(kind, value, tb)
 
     sys.excepthook = hook
+    signal.signal(signal.SIGTERM, _raise_stopped)
 
 
 def positive_list(text, option, allow_zero=False):
@@ -75,11 +110,16 @@ def positive_list(text, option, allow_zero=False):
     return values
 
 
+def fail(message):
+    """Exit 2 with one line, `<tool>: error: message` (<tool>: the script's file name)."""
+    print(f"{_tool()}: error: {message}", file=sys.stderr)
+    sys.exit(2)
+
+
 def require(condition, message):
-    """Exit 2 with `<tool>: error: message` unless condition."""
+    """fail(message) unless condition."""
     if not condition:
-        print(f"{_tool()}: error: {message}", file=sys.stderr)
-        sys.exit(2)
+        fail(message)
 
 
 def _tool():
@@ -139,14 +179,19 @@ def read_json_object(path, numbers=(), keys=()):
     return data
 
 
-def read_csv_columns(path, columns=(), min_rows=0):
+def read_csv_columns(path, columns=(), min_rows=0, final_newline=True):
     """A numeric CSV with a header row ('#' lines and blank lines skipped) as {column: [float]}.
-    Raises OSError if it cannot be read, and ValueError naming the line if a row has another
-    number of cells than the header (a truncated file), a cell is not a number, a column of
-    `columns` is missing or there are fewer than `min_rows` rows."""
+    Raises Unreadable naming the file (and the line) if it cannot be read, if a row has another
+    number of cells than the header or a cell is not a number, if a column of `columns` is
+    missing, if there are fewer than `min_rows` rows, or, with `final_newline` (the files sph-run
+    writes, whose every line ends with one), if the last line has no newline: a file cut short
+    at a cell boundary would otherwise pass for a complete one. Files people write (an
+    experiment's data) are read with final_newline=False."""
     header, data = None, None
-    with open(path) as f:
+    with reading(path), open(path) as f:
         for n, line in enumerate(f, 1):
+            if final_newline and not line.endswith("\n"):
+                raise ValueError(f"line {n}: cut short (the file ends inside it, without a newline)")
             if not line.strip() or line.startswith("#"):
                 continue
             cells = line.strip().split(",")
@@ -160,23 +205,31 @@ def read_csv_columns(path, columns=(), min_rows=0):
                     column.append(float(cell))
                 except ValueError:
                     raise ValueError(f"line {n}: {cell!r} is not a number") from None
-    if header is None:
-        raise ValueError("empty: expected a header row")
-    missing = [c for c in columns if c not in header]
-    if missing:
-        raise ValueError(f"no column {', '.join(missing)} (header: {','.join(header)})")
-    rows = len(data[0]) if data else 0
-    if rows < min_rows:
-        raise ValueError(f"{rows} rows, expected at least {min_rows}")
+        if header is None:
+            raise ValueError("empty: expected a header row")
+        missing = [c for c in columns if c not in header]
+        if missing:
+            raise ValueError(f"no column {', '.join(missing)} (header: {','.join(header)})")
+        rows = len(data[0]) if data else 0
+        if rows < min_rows:
+            raise ValueError(f"{rows} rows, expected at least {min_rows}")
     return dict(zip(header, data))
 
 
 def write_atomic(path, text):
-    """Write `text` to `path` through a temporary file in the same folder and os.replace, so that
-    a reader, a crash or a Ctrl-C at any moment finds the previous complete file or the new one,
-    never a part. The tools rewrite their tables this way after every run."""
+    """Write `text` to `path` through a temporary file in the same folder (`.<name>.tmp<pid>`)
+    and os.replace, so that a reader, a crash or a Ctrl-C at any moment finds the previous
+    complete file or the new one, never a part. The tools rewrite their tables this way after
+    every run. An exception removes the temporary; a SIGKILL between writing and renaming leaves
+    it, so a write first removes the `.<name>.tmp*` left by earlier processes (one writer per
+    table is assumed: two tools writing the same table at once would be wrong anyway)."""
     path = pathlib.Path(path)
     tmp = path.with_name(f".{path.name}.tmp{os.getpid()}")
+    with contextlib.suppress(OSError):
+        for name in os.listdir(path.parent):
+            if name.startswith(f".{path.name}.tmp") and name != tmp.name:
+                with contextlib.suppress(OSError):
+                    os.unlink(path.parent / name)
     try:
         with open(tmp, "w", newline="") as f:  # newline="": csv's \r\n row ends kept as written
             f.write(text)
@@ -196,3 +249,117 @@ def csv_text(rows, columns):
     w.writeheader()
     w.writerows(rows)
     return buf.getvalue()
+
+
+def md_cell(text):
+    """`text` as one cell of a Markdown table: `|` escaped, line breaks as spaces."""
+    return str(text).replace("|", "\\|").replace("\n", " ")
+
+
+def md_status_row(label, status, columns):
+    """A Markdown table row of `columns` cells for a row with no figures: its label, then its
+    status (why: failed, interrupted, unreadable, skipped), then empty cells."""
+    return f"| {md_cell(label)} | {md_cell(status)} |" + " |" * (columns - 2)
+
+
+# ---- a run of sph-run, as the study tools start and classify it ----
+
+def end_child(proc, grace=10.0):
+    """End a running child: SIGTERM (sph-run then stops after the step in progress), SIGKILL
+    if it is still there after `grace` seconds or if another signal interrupts the wait; then
+    wait for it, so that it never outlives the tool."""
+    if proc.poll() is not None:
+        return
+    try:
+        proc.terminate()
+        proc.wait(timeout=grace)
+    except BaseException:  # TimeoutExpired, or a second Ctrl-C / SIGTERM while waiting
+        proc.kill()
+        proc.wait()
+        if sys.exc_info()[0] is not subprocess.TimeoutExpired:
+            raise
+
+
+def run_child(cmd, log, echo=None):
+    """Run `cmd`, its stdout and stderr into the file `log` (each line also given to `echo`,
+    if any, as it comes); returns its exit code. On any exception while it runs (Ctrl-C,
+    SIGTERM, a bug) the child is ended and waited for (end_child) before the exception goes on."""
+    with open(log, "w") as f:
+        proc = subprocess.Popen(cmd, stdout=subprocess.PIPE if echo else f, stderr=subprocess.STDOUT, text=True)
+        try:
+            if echo:
+                for line in proc.stdout:
+                    f.write(line)
+                    echo(line)
+            return proc.wait()
+        except BaseException:
+            end_child(proc)
+            raise
+        finally:
+            if proc.stdout:
+                proc.stdout.close()
+
+
+def interrupted_status(summary):
+    """"interrupted (SIGTERM at t = 0.0123 s)" for a summary.json sph-run marked "interrupted"
+    (stopped by a signal before its end time), or None."""
+    i = summary.get("interrupted") if isinstance(summary, dict) else None
+    if i is None:
+        return None
+    if not isinstance(i, dict):
+        return "interrupted"
+    t = i.get("t")
+    return f"interrupted ({i.get('by', 'a signal')}" + (f" at t = {t:.6g} s)" if isinstance(t, (int, float)) else ")")
+
+
+def read_run(out_dir, rc=0, numbers=(), keys=(), then=None):
+    """What a run of sph-run into `out_dir` that exited with `rc` gave: (value, None) if it is
+    usable, value being its summary.json (with a number at every dotted key of `numbers`, some
+    value at every key of `keys`) or then(summary) (which reads more of the outputs and may
+    raise Unreadable); otherwise (None, status): "failed (exit N)", "interrupted (<signal> at t =
+    T s)" (a summary.json marked "interrupted": sph-run stopped by SIGINT/SIGTERM, exit 130/143,
+    or an earlier run's read with rc 0) or "unreadable: <file>: <reason>"."""
+    out_dir = pathlib.Path(out_dir)
+    if rc != 0:
+        if rc in (128 + signal.SIGINT, 128 + signal.SIGTERM):
+            with contextlib.suppress(Unreadable):
+                status = interrupted_status(read_json_object(out_dir / "summary.json"))
+                if status:
+                    return None, status
+        return None, f"failed (exit {rc})"
+    try:
+        summary = read_json_object(out_dir / "summary.json", numbers=numbers, keys=keys)
+        status = interrupted_status(summary)
+        if status:
+            return None, status
+        return (then(summary) if then else summary), None
+    except Unreadable as e:
+        return None, f"unreadable: {e}"
+
+
+def sph_run(cmd, out_dir, numbers=(), keys=(), then=None, echo=None):
+    """Run sph-run (`cmd`, whose --out is `out_dir`), its output into out_dir/run.log (lines
+    also to `echo`), and classify it with read_run: (value, None) or (None, status). The
+    child is ended and waited for if the tool is interrupted meanwhile (run_child)."""
+    out_dir = pathlib.Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    rc = run_child(cmd, out_dir / "run.log", echo)
+    return read_run(out_dir, rc, numbers, keys, then)
+
+
+def log_tail(out_dir, lines=5):
+    """The last lines of a run's run.log, indented, for a message about a run that failed."""
+    with contextlib.suppress(OSError):
+        text = (pathlib.Path(out_dir) / "run.log").read_text(errors="replace").strip().splitlines()
+        return "\n".join("    " + line for line in text[-lines:])
+    return ""
+
+
+def exit_if_unusable(bad, tables, total=None, before=()):
+    """The study tools' closing check, after their tables are written: exit 2 with one line
+    naming every run in `bad` ("<which run>: <status>") and any other problem in `before`,
+    saying that `tables` hold every other figure; return if there is none."""
+    problems = list(before)
+    if bad:
+        problems.append(f"{len(bad)}{f' of {total}' if total else ''} run(s) not usable ({'; '.join(bad)})")
+    require(not problems, "; ".join(problems) + f"; every other figure is in {tables}")

@@ -25,24 +25,31 @@ parallel, so that wall times compare), and writes into --out:
 
 When. study.md and study.csv are rewritten after every run (into a temporary file in --out, then
 renamed onto the table: never half-written), so a study that is interrupted or crashes leaves the
-rows of every run it finished; until the reference has run their accuracy columns say "pending".
-pareto.png and dt.png are drawn at the end.
+rows of every run it finished; until the reference has run their accuracy columns are empty and
+the column "accuracy note" says "pending: ...". pareto.png and dt.png are drawn at the end.
 
-Failures. A run sph-run reports failed is a "failed" row; a run whose summary.json, stats.csv or
-probe files cannot be read (missing, truncated, not JSON or CSV) is a row "unreadable: <file>:
-<reason>". If the reference run fails or cannot be read, every row keeps its cost columns, the
-accuracy columns say "unavailable: <reason>" and there is no pareto.png. Exit codes: 0 the tables
-are complete ("failed" rows included); 2 bad arguments, before any run, or, after writing the
-tables, a run or the reference unreadable or the reference failed (one line, `sph-study: error:
-...`); 130 interrupted (Ctrl-C), the tables holding the runs finished before.
+Failures. A run sph-run reports failed is a row "failed (exit N)"; a run sph-run stopped by a
+signal (summary.json marked "interrupted") a row "interrupted (<signal> at t = T s)"; a run whose
+summary.json, stats.csv or probe files cannot be read (missing, truncated, not JSON or CSV) a row
+"unreadable: <file>: <reason>"; a `constant` configuration whose step source is not usable (see
+Configurations) a row "skipped: <why>". If the reference run fails or cannot be read, every row
+keeps its cost columns, the accuracy columns are empty, "accuracy note" says "unavailable:
+<reason>" and there is no pareto.png. Exit codes: 0 the tables are complete ("failed" and
+"skipped" rows included); 2 bad arguments, before any run, or, after writing the tables, a run
+unreadable or interrupted, or the reference unavailable (one line, `sph-study: error: ...`);
+130 / 143 interrupted (Ctrl-C / SIGTERM: the running sph-run is stopped and waited for, and the
+study dies by that signal), the tables holding the runs finished before.
 
 Configurations. By default every `method mode` pair the scene loads with (sph-run
 --list-modes), so a mode added to the engine joins the study with no change here; --config adds
 more (MODE is `mode` or `method/mode`; --set keys may drop the leading `simulation.`, e.g.
 `--config "individual --set stepping.lambda_v=0.1"`). A `constant` configuration without its
 own `stepping.dt` takes the smallest step an adaptive run of the same method took (the largest
-fixed step known to be stable for the whole run, as a user without adaptivity would choose it;
-the plain `global` run's if there is one).
+fixed step known to be stable for the whole run, as a user without adaptivity would choose it):
+the plain `global` run's if the study has one, else the smallest over the method's adaptive runs.
+If that run (or every such run) is not usable, the configuration is skipped, a row saying why;
+with no adaptive run of its method in the study it runs at the scene's own step (noted under the
+table).
 
 Reference. A `constant` run of the scene's method at a small step: half the smallest step the
 `global` run took (or --reference-dt), or an earlier run given with --reference DIR.
@@ -72,8 +79,9 @@ import time
 # sph_python.py sits beside this file (tools/, or build/tools/ beside sph-study); put that folder
 # first on the path so that loading this file as a module (tools that import it, the tests) finds it too.
 sys.path.insert(0, os.path.dirname(os.path.realpath(__file__)))
-from sph_python import Unreadable, csv_text, errors_as_exit_2, need, read_csv_columns, read_json_object, reading, \
-    write_atomic  # noqa: E402
+from sph_python import Unreadable, csv_text, errors_as_exit_2, exit_if_unusable, fail, md_cell, md_status_row, need, \
+    read_csv_columns, read_json_object, write_atomic  # noqa: E402
+import sph_python  # noqa: E402
 import stepping_bound  # noqa: E402
 
 need("numpy")
@@ -82,14 +90,6 @@ import numpy as np  # noqa: E402
 TOP_KEYS = {"name", "description", "simulation", "domain", "fluid", "fluid_blocks", "boundaries", "output",
             "pcisph", "dfsph", "boundary", "emitters", "probes", "standing_wave"}  # engine/data/scene_detail.hpp k_top_keys
 HERE = pathlib.Path(__file__).resolve().parent
-
-
-PROG = "sph-study"  # the name errors are reported under; tools importing this module set their own
-
-
-def fail(msg):
-    print(f"{PROG}: error: {msg}", file=sys.stderr)
-    sys.exit(2)
 
 
 def full_key(key):
@@ -128,10 +128,38 @@ def parse_config(spec):
     return {"label": label, "method": method, "mode": mode, "sets": sets}
 
 
-def read_csv(path, columns=(), min_rows=0):
-    """Numeric CSV with a header; '#' lines skipped. Returns {column: np.array}; OSError, or
-    ValueError naming the line, as sph_python.read_csv_columns (a truncated row, a missing column)."""
-    return {h: np.array(v, dtype=float) for h, v in read_csv_columns(path, columns, min_rows).items()}
+def read_csv(path, columns=(), min_rows=0, final_newline=True):
+    """Numeric CSV with a header; '#' lines skipped. Returns {column: np.array}; Unreadable naming
+    the file and the line as sph_python.read_csv_columns (a truncated row, a missing column)."""
+    return {h: np.array(v, dtype=float) for h, v in read_csv_columns(path, columns, min_rows, final_newline).items()}
+
+
+def read_experiments(scene_path, probes):
+    """The measured data of every probe with an `experiment` object, {probe name: (te, ze)}: the
+    first two columns of its file (scenes/README.md; a column `a_in` is left out), relative to the
+    scene's folder. sph-study and resolution_study read them once, before any run, so that a
+    probe without a file, or a file that is missing, unreadable, not numeric CSV, with fewer than
+    two columns or no row, ends the tool at once (exit 2, naming the scene, the probe and the
+    file) instead of after every run."""
+    scene_dir = pathlib.Path(scene_path).resolve().parent
+    measured = {}
+    for probe in probes:
+        if "experiment" not in probe:
+            continue
+        e = probe["experiment"]
+        what = f"{scene_path}: probe '{probe.get('name')}'"
+        if not isinstance(e, dict) or not isinstance(e.get("file"), str):
+            fail(f'{what}: experiment without a "file"')
+        try:
+            data = read_csv(scene_dir / e["file"], final_newline=False)  # a file people write
+        except Unreadable as error:
+            fail(f"{what}: experiment file {error}")
+        keys = [k for k in data if k != "a_in"]
+        if len(keys) < 2 or len(data[keys[0]]) == 0:
+            fail(f"{what}: experiment file {scene_dir / e['file']}: expected a header and at least one row of two "
+                 f"or more columns, found {len(keys)} column(s) and {len(data[keys[0]]) if keys else 0} row(s)")
+        measured[probe.get("name")] = (data[keys[0]], data[keys[1]])
+    return measured
 
 
 # What the tables read from a run's summary.json: a summary without one of them is unreadable.
@@ -191,39 +219,40 @@ class Study:
             self.probes = self.scene_json["probes"]
         for i, probe in enumerate(self.probes):  # the engine's default name, <type>_<index>
             probe.setdefault("name", f"{probe.get('type')}_{i}")
+        self.measured = {}  # {probe name: (te, ze)}, read_experiments before any run
         self.configs, self.results, self.problems, self.done = [], [], [], []
         self.ref_summary = self.ref_series = None
         self.ref_note = "pending: the reference runs after the configurations"  # None once it is read
         self.started = datetime.datetime.now()
         self.context = f"{args.threads} threads, {machine()}, {self.started:%Y-%m-%d %H:%M}, engine {source_commit()}"
 
-    def sph_run(self, extra, out_dir, label, index, total):
+    def sph_run(self, extra, out_dir, label, index, total, then=None):
+        """One run (sph_python.sph_run; its output into out_dir/run.log, progress lines echoed):
+        (summary, None), the summary with its own figures from `then` if given, or (None, status)."""
         cmd = [self.a.sph_run, str(self.scene_path), "--threads", str(self.a.threads), "--out", str(out_dir)]
         for s in self.common + extra:
             cmd += ["--set", s]
-        out_dir.mkdir(parents=True, exist_ok=True)
         print(f"[{time.strftime('%H:%M:%S')}] run {index}/{total} {label}: {shlex.join(cmd)}", flush=True)
         t0 = time.time()
         cpu0 = resource.getrusage(resource.RUSAGE_CHILDREN)
-        with open(out_dir / "run.log", "w") as log:
-            proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-            for line in proc.stdout:
-                log.write(line)
-                if " t = " in line or "error" in line or "failed" in line:
-                    print(f"    {label}: {line.split('] ', 2)[-1].strip()}", flush=True)
-            rc = proc.wait()
-        cpu1 = resource.getrusage(resource.RUSAGE_CHILDREN)
-        cpu = (cpu1.ru_utime - cpu0.ru_utime) + (cpu1.ru_stime - cpu0.ru_stime)
-        if rc != 0:
-            print(f"    {label}: FAILED (exit {rc}); see {out_dir / 'run.log'}", flush=True)
-            return None, f"failed (exit {rc})"
-        try:
-            s = read_json_object(out_dir / "summary.json", numbers=SUMMARY_NUMBERS)
-        except Unreadable as e:
-            print(f"    {label}: UNREADABLE: {e}", flush=True)
-            return None, f"unreadable: {e}"
-        s["_cpu_s"] = cpu  # whole process, set-up included: less sensitive than wall time to a shared machine
-        s["_dir"] = str(out_dir)
+
+        def echo(line):
+            if " t = " in line or "error" in line or "failed" in line:
+                print(f"    {label}: {line.split('] ', 2)[-1].strip()}", flush=True)
+
+        def read(s):
+            cpu1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+            # whole process, set-up included: less sensitive than wall time to a shared machine
+            s["_cpu_s"] = (cpu1.ru_utime - cpu0.ru_utime) + (cpu1.ru_stime - cpu0.ru_stime)
+            s["_dir"] = str(out_dir)
+            if then:
+                then(s)
+            return s
+
+        s, status = sph_python.sph_run(cmd, out_dir, numbers=SUMMARY_NUMBERS, then=read, echo=echo)
+        if status:
+            print(f"    {label}: {status}; see {out_dir / 'run.log'}", flush=True)
+            return None, status
         print(f"    {label}: {s['steps']} steps, {s['wall_time_s']:.1f} s wall ({time.time() - t0:.1f} s with set-up)",
               flush=True)
         return s, None
@@ -260,8 +289,7 @@ class Study:
         sound-crossing bound, the standing wave, and its series for the deviation from the
         reference. Unreadable if its stats.csv or a probe file is missing or cannot be parsed."""
         d = pathlib.Path(r["_dir"])
-        with reading(d / "stats.csv"):
-            stats = read_csv(d / "stats.csv", columns=("dt", "rho_err_avg"), min_rows=1)
+        stats = read_csv(d / "stats.csv", columns=("dt", "rho_err_avg"), min_rows=1)
         dt = stats["dt"]
         cost = {
             "status": "ok", "particles": r["fluid_particles"], "simulated_s": r["simulated_time_s"],
@@ -279,9 +307,8 @@ class Study:
         }
         series = primary_series(d, self.probes, strict=True)
         after = {}
-        scene_dir = self.scene.resolve().parent
         for p in (p for p in self.probes if "experiment" in p):
-            err, shift, at_bound = experiment_error(d, p, scene_dir)
+            err, shift, at_bound = experiment_error(d, p, self.measured[p["name"]])
             after[f"exp err {p['name']} %"] = 100 * err
             after[f"exp shift {p['name']}"] = shift
             after[f"exp shift at bound {p['name']}"] = at_bound
@@ -319,7 +346,7 @@ class Study:
                 continue
             row = {"configuration": c["label"], "method": c["method"], "mode": c["mode"]}
             if not r:
-                row["status"] = "failed" if problem.startswith("failed") else problem
+                row["status"] = problem
                 rows.append(row)
                 continue
             row.update(r["_own"]["cost"])
@@ -335,11 +362,12 @@ class Study:
                 # Over the series whose reference varies (a flat reference has no range to divide by).
                 rel = [x for x in rel if np.isfinite(x)]
                 row["deviation (mean rel.)"] = float(np.mean(rel)) if rel else float("nan")
-            else:  # pending or unavailable: every series the reference would give, saying why not
+            else:  # pending or unavailable: every series the reference would give, empty, and why not
                 for i, p in enumerate(self.probes):
                     name, _, unit = series_of(p, i)
-                    row[f"dev {name} ({unit})"] = self.ref_note
-                row["deviation (mean rel.)"] = self.ref_note
+                    row[f"dev {name} ({unit})"] = None
+                row["deviation (mean rel.)"] = None
+            row["accuracy note"] = self.ref_note or ""
             row.update(r["_own"]["after"])
             rows.append(row)
         return rows
@@ -379,14 +407,13 @@ class Study:
         lines = [head, "", "| " + " | ".join(hdr) + " |", "|" + "---|" * len(hdr)]
 
         def acc(x):  # an accuracy cell: a number, or "pending"/"unavailable" (the reason is in the head line)
-            return x.split(":")[0] if isinstance(x, str) else fmt(x)
+            return self.ref_note.split(":")[0] if x is None and self.ref_note else fmt(x)
 
         for row in rows:
             if row["status"] != "ok":
-                what = "failed (see its run.log)" if row["status"] == "failed" else row["status"].replace("|", "\\|")
-                lines.append(f"| {row['configuration']} | {what} |" + " |" * (len(hdr) - 2))
+                lines.append(md_status_row(row["configuration"], row["status"], len(hdr)))
                 continue
-            cells = [row["configuration"], f"{row['particles']:,}", f"{row['simulated_s']:.3g}", f"{row['wall_s']:.1f}",
+            cells = [md_cell(row["configuration"]), f"{row['particles']:,}", f"{row['simulated_s']:.3g}", f"{row['wall_s']:.1f}",
                      f"{row['cpu_s']:.1f}", f"{row['steps']:,}", f"{row['avg_dt_ms']:.3g} ({row['min_dt_ms']:.3g}–{row['max_dt_ms']:.3g})",
                      f"{row['avg_active_pct']:.0f}", fmt(row["speedup_vs_global"]), fmt(row["speedup_vs_constant"]),
                      f"{row['avg_density_error_pct']:.2f} / {row['max_density_error_pct']:.1f}",
@@ -399,7 +426,7 @@ class Study:
                 cells += [f"{row['wave period s']:.4f} ({row['wave period err %']:+.2f})" if "wave period s" in row else "",
                           f"{row['wave decay 1/s']:.4f} ({row['wave decay / theory']:.2f})" if "wave period s" in row else ""]
             lines.append("| " + " | ".join(cells) + " |")
-        notes = [f"* {c['label']}: {c['note']}" for c in self.configs if c.get("note")]
+        notes = [f"* {md_cell(c['label'])}: {c['note']}" for c in self.configs if c.get("note")]
         if any(v is True for row in rows for k, v in row.items() if k.startswith("exp shift at bound ")):
             notes.append("* ΔT marked * is the first or last shift the search could try (±max_shift, or where the run "
                          "ends): a better fit may lie beyond it, with a wider `max_shift` or a longer run.")
@@ -423,36 +450,42 @@ class Study:
         # Adaptive runs first: a `constant` configuration takes its step from them.
         order = sorted(range(len(configs)), key=lambda k: configs[k]["mode"] == "constant")
         results = self.results = [None] * len(configs)
-        self.problems = [None] * len(configs)  # "failed (exit N)", "unreadable: ..." or None
+        self.problems = [None] * len(configs)  # a status ("failed (exit N)", "unreadable: ...", ...) or None
         self.done = [False] * len(configs)
         total = len(configs) + (0 if self.a.reference else 1)
         for n, k in enumerate(order, 1):
             c = configs[k]
             sets = [f"simulation.method={c['method']}", f"simulation.stepping.mode={c['mode']}"] + c["sets"]
             if c["mode"] == "constant" and not any(s.startswith("simulation.stepping.dt=") for s in c["sets"]):
-                same = [(r, cc) for r, cc in zip(results, configs) if r and cc["mode"] != "constant" and
-                        cc["method"] == c["method"]]
                 # the plain `global` run's smallest step (a global stability bound); an
                 # individual run's smallest dt_sim is one particle's and would be too strict
-                glob = [r for r, cc in same if cc["mode"] == "global" and not cc["sets"]]
-                pool = glob or [r for r, _ in same]
+                adaptive = [j for j, cc in enumerate(configs) if cc["mode"] != "constant" and cc["method"] == c["method"]]
+                glob = [j for j in adaptive if configs[j]["mode"] == "global" and not configs[j]["sets"]]
+                source = glob or adaptive
+                pool = [results[j] for j in source if results[j]]
+                which = "global" if glob else "adaptive"
                 if pool:
                     dt = min(r["min_dt_s"] for r in pool)
                     sets.append(f"simulation.stepping.dt={dt!r}")
-                    c["note"] = (f"dt = {dt * 1e3:.4g} ms, the smallest step of the "
-                                 f"{'global' if glob else 'adaptive'} run")
+                    c["note"] = f"dt = {dt * 1e3:.4g} ms, the smallest step of the {which} run"
+                elif source:  # as mode_table: no step known to be stable, so no run
+                    why = "; ".join(f"{configs[j]['label']}: {self.problems[j]}" for j in source)
+                    self.problems[k] = (f"skipped: its step is the smallest the {which} run of {c['method']} took, "
+                                        f"and no such run is usable ({why})")
+                    print(f"    {c['label']}: {self.problems[k]}", flush=True)
+                    self.done[k] = True
+                    self.write_tables()
+                    continue
+                else:
+                    c["note"] = f"dt = the scene's own: the study has no adaptive run of {c['method']} to take it from"
             slug = "".join(ch if ch.isalnum() or ch in "._-" else "_" for ch in c["label"])
-            r, problem = self.sph_run(sets, self.out / f"{n:02d}_{slug}", c["label"], n, total)
-            if r:
-                try:  # the run's own figures, read now: a file it lacks makes its row, not the study, fail
-                    r["_own"] = self.own_figures(r)
-                except Unreadable as e:
-                    print(f"    {c['label']}: UNREADABLE: {e}", flush=True)
-                    r, problem = None, f"unreadable: {e}"
+            # the run's own figures, read now: a file it lacks makes its row, not the study, fail
+            r, problem = self.sph_run(sets, self.out / f"{n:02d}_{slug}", c["label"], n, total,
+                                      then=lambda s: s.__setitem__("_own", self.own_figures(s)))
             results[k], self.problems[k], self.done[k] = r, problem, True
             self.write_tables()
         self.reference(total)
-        self.write_tables()
+        return self.write_tables()
 
     def load_reference(self, d, what, strict):
         """Reads the reference's summary and series; returns None, or the reason they are
@@ -483,8 +516,8 @@ class Study:
                                    f"simulation.stepping.dt={dt!r}"], d, f"reference (constant, dt = {dt * 1e3:.4g} ms)",
                                   total, total)
         if problem:
-            self.ref_note = (f"unavailable: the reference run {problem}, see {d / 'run.log'}" if problem.startswith("failed")
-                             else f"unavailable: the reference run's output is {problem}")
+            self.ref_note = (f"unavailable: the reference run's output is {problem}" if problem.startswith("unreadable")
+                             else f"unavailable: the reference run {problem}, see {d / 'run.log'}")
             return
         why = self.load_reference(d, "the reference run's output", strict=True)
         self.ref_note = f"unavailable: {why}" if why else None
@@ -512,8 +545,7 @@ def primary_series(run_dir, probes, strict=False):
             if strict:
                 raise Unreadable(f"{f}: no such file (the run was to write every probe of the scene)")
             continue
-        with reading(f):
-            d = read_csv(f, columns=("t", col), min_rows=1)
+        d = read_csv(f, columns=("t", col), min_rows=1)
         out[key] = (d["t"], d[col], unit)
     return out
 
@@ -530,20 +562,17 @@ def deviation(run, ref):
     return rms, (rms / span if span > 0 else float("nan"))
 
 
-def experiment_series(run_dir, probe, scene_dir):
+def experiment_series(run_dir, probe, measured):
     """A probe with an `experiment` object, made dimensionless as the experiment is: returns
-    (T, Z) of the run and (te, ze) of the measured data. A file that cannot be read is Unreadable."""
+    (T, Z) of the run and (te, ze), the measured data (`measured`, from read_experiments). A
+    probe file that cannot be read is Unreadable."""
     e = probe["experiment"]
     f = pathlib.Path(run_dir) / "probes" / f"{probe.get('name')}.csv"
     col = series_of(probe, 0)[1]
-    with reading(f):
-        d = read_csv(f, columns=("t", col), min_rows=1)
+    d = read_csv(f, columns=("t", col), min_rows=1)
     T = d["t"] * e.get("t_scale", 1.0)
     Z = (d[col] - e.get("value_offset", 0.0)) * e.get("value_scale", 1.0)
-    with reading(scene_dir / e["file"]):
-        x = read_csv(scene_dir / e["file"])
-    keys = [k for k in x.keys() if k not in ("a_in",)]
-    return T, Z, x[keys[0]], x[keys[1]]
+    return T, Z, measured[0], measured[1]
 
 
 SHIFT_STEP = 0.005  # the time-shift grid, in the experiment's (dimensionless) time
@@ -582,9 +611,9 @@ def shifted_error(T, Z, te, ze, t_range, max_shift, points_shift=None, report_bo
     return best[0], best[1], len(tried) > 1 and best[1] in (tried[0], tried[-1])
 
 
-def experiment_error(run_dir, probe, scene_dir):
+def experiment_error(run_dir, probe, measured):
     e = probe["experiment"]
-    T, Z, te, ze = experiment_series(run_dir, probe, scene_dir)
+    T, Z, te, ze = experiment_series(run_dir, probe, measured)
     return shifted_error(T, Z, te, ze, e.get("t_range", [-1e300, 1e300]), e.get("max_shift", 0.0), report_bound=True)
 
 
@@ -598,8 +627,7 @@ def wave_figures(run_dir, fluid_probe, summary, scene_json):
     f = pathlib.Path(run_dir) / "probes" / f"{fluid_probe}.csv"
     if not wave or wave["mode"] % 2 == 0 or not f.is_file():
         return None
-    with reading(f):
-        d = read_csv(f)
+    d = read_csv(f)
     if "centre_x" not in d or not (d["t"] > wave["at"]).any():  # no column, or the run ends before the wave
         return None
     t, x = d["t"], d["centre_x"]
@@ -683,14 +711,13 @@ def main():
         fail(f"--reference-dt {args.reference_dt}: expected a step > 0 s")
     if args.threads < 1:
         fail(f"--threads {args.threads}: expected at least 1")
-    if args.reference:  # checked before any run, not after all of them
-        ref_summary = pathlib.Path(args.reference) / "summary.json"
-        try:
-            read_json_object(ref_summary, numbers=("avg_dt_s", "steps", "wall_time_s"))
-        except Unreadable as e:
-            fail(f"--reference {args.reference}: no readable summary.json there ({e})")
-    errors_as_exit_2()  # an output that cannot be written: one line, exit 2; Ctrl-C: exit 130
+    errors_as_exit_2()  # an output that cannot be written: one line, exit 2; Ctrl-C, SIGTERM: die by it
     study = Study(args)
+    if args.reference:  # checked before any run, not after all of them
+        why = study.load_reference(pathlib.Path(args.reference), f"--reference {args.reference}", strict=False)
+        if why:
+            fail(why)
+        study.ref_note = None
     try:
         study.out.mkdir(parents=True, exist_ok=True)
     except OSError as e:
@@ -702,27 +729,8 @@ def main():
         if (method, c["mode"]) not in known:
             fail(f"--config {spec!r}: no mode {method}/{c['mode']} for this scene (it loads with: "
                  + ", ".join(f"{m}/{o}" for m, o in sorted(known)) + ")")
-    # The experiments' files are read before any run, so that a missing or unreadable one stops
-    # the study at once instead of after every configuration has run.
-    for probe in study.probes:
-        if "experiment" not in probe:
-            continue
-        if not isinstance(probe["experiment"], dict) or "file" not in probe["experiment"]:
-            fail(f"{study.scene}: probe '{probe.get('name')}': experiment without a \"file\"")
-        where = study.scene.resolve().parent / probe["experiment"]["file"]
-        try:
-            data = read_csv(where)
-            if len(data) < 2 or len(next(iter(data.values()))) == 0:
-                raise ValueError("expected a header and at least one row of two or more columns")
-        except (OSError, ValueError) as e:
-            fail(f"{study.scene}: probe '{probe.get('name')}': experiment file {where}: {getattr(e, 'strerror', None) or e}")
-    if args.reference:
-        why = study.load_reference(pathlib.Path(args.reference), f"--reference {args.reference}", strict=False)
-        if why:
-            fail(why)
-        study.ref_note = None
-    study.run()
-    rows, text = study.write_tables()
+    study.measured = read_experiments(study.scene, study.probes)  # before any run: a bad file stops the study now
+    rows, text = study.run()
     print()
     print(text)
     configs, results = study.configs, study.results
@@ -769,15 +777,13 @@ def main():
     elif runs:
         print(f"sph-study: warning: no dt.png: plot_dt.py is not beside {HERE / 'sph-study'}", file=sys.stderr)
     print("wrote " + ", ".join(str(f) for f in wrote))
-    # What the tables could not say: exit 2, after they are written, with one line.
-    problems = []
-    if study.ref_note is not None:
-        problems.append(f"the accuracy columns are unavailable: {study.ref_note.split(': ', 1)[1]}")
-    unreadable = [(c["label"], p) for c, p in zip(configs, study.problems) if p and p.startswith("unreadable")]
-    if unreadable:
-        problems.append(f"{len(unreadable)} run(s) unreadable (" + "; ".join(f"{c}: {p}" for c, p in unreadable) + ")")
-    if problems:
-        fail("; ".join(problems) + f"; {study.out / 'study.csv'} and study.md have every other figure")
+    # What the tables could not say: exit 2, after they are written, with one line. A failed run
+    # (and a constant one skipped for it) is a result of the study; an unreadable or interrupted one is not.
+    reference = [] if study.ref_note is None else \
+        [f"the accuracy columns are unavailable: {study.ref_note.split(': ', 1)[1]}"]
+    exit_if_unusable([f"{c['label']}: {p}" for c, p in zip(configs, study.problems)
+                      if p and p.startswith(("unreadable", "interrupted"))],
+                     f"{study.out / 'study.csv'} and study.md", before=reference)
 
 
 if __name__ == "__main__":
