@@ -96,6 +96,11 @@ mkdir full && if mount -t tmpfs -o size=5400k tmpfs full 2>/dev/null; then
   head -c 1M /dev/zero > full/filler
   "$run" "$scene" --end 0.01 -q --out full/run2 2>e_noroom; rc=$?
   check "no room for the reserve: exit 5 before the run (got $rc)" '[ $rc -eq 5 ] && grep -q "no room for the 5 MiB the run keeps" e_noroom && [ ! -e full/run2 ]'
+  # Room for the reserve but not for scene_as_run.json (glass's, 126 kB with its mesh inline):
+  # exit 5 before the run, the reserve removed and the folder left clean.
+  rm -f full/filler && head -c 220K /dev/zero > full/filler
+  "$run" "$src/scenes/glass.json" --end 0.01 -q --out full/run3 2>e_noscene; rc=$?
+  check "no room for scene_as_run.json: exit 5 naming it, no folder left (got $rc)" '[ $rc -eq 5 ] && grep -q "scene_as_run.json" e_noscene && [ ! -e full/run3 ]'
   umount full
 else
   echo "FAIL: cannot mount a tmpfs (the disk-full checks need root)"; fail=1

@@ -24,16 +24,16 @@ check "global with pcisph exits 2 naming the method (got $rc)" '[ $rc -eq 2 ] &&
 "$run" "$tmp/does_not_exist.json" 2>"$tmp/err3"; rc=$?
 check "missing file exits 2 (got $rc)" '[ $rc -eq 2 ] && grep -q "cannot open scene file" "$tmp/err3"'
 
-# 2b. The run folder's scene.json is the scene as run, overrides applied: run again from it (into
+# 2b. The run folder's scene_as_run.json is the scene as run, overrides applied: run again from it (into
 # another folder), the same steps, step sizes and densities to the bit.
 "$run" "$src/scenes/dam_break.json" --end 0.03 --set fluid.viscosity=0.05 --mode binned --no-frames --out "$tmp/as_run" -q; rc1=$?
-"$run" "$tmp/as_run/scene.json" --out "$tmp/again" -q; rc2=$?
-check "a run from its scene.json exits 0 (got $rc1, $rc2)" '[ $rc1 -eq 0 ] && [ $rc2 -eq 0 ]'
-check "scene.json holds the overrides (alpha 0.05, binned, end 0.03, no frames)" 'python3 -c "
+"$run" "$tmp/as_run/scene_as_run.json" --out "$tmp/again" -q; rc2=$?
+check "a run from its scene_as_run.json exits 0 (got $rc1, $rc2)" '[ $rc1 -eq 0 ] && [ $rc2 -eq 0 ]'
+check "scene_as_run.json holds the overrides (alpha 0.05, binned, end 0.03, no frames)" 'python3 -c "
 import json, sys
-s = json.load(open(\"$tmp/as_run/scene.json\"))
+s = json.load(open(\"$tmp/as_run/scene_as_run.json\"))
 sys.exit(0 if s[\"fluid\"][\"viscosity\"] == 0.05 and s[\"simulation\"][\"stepping\"][\"mode\"] == \"binned\" and s[\"simulation\"][\"end_time\"] == 0.03 and s[\"simulation\"][\"frame_rate\"] == 0 else 1)"'
-check "the run from scene.json repeats the run: t, dt, densities, active rows to the bit" 'python3 -c "
+check "the run from scene_as_run.json repeats the run: t, dt, densities, active rows to the bit" 'python3 -c "
 import csv, sys
 cols = (\"step\", \"t\", \"dt\", \"rho_err_avg\", \"rho_err_max\", \"v_max\", \"active\", \"force_evaluations\")
 a = [[r[c] for c in cols] for r in csv.DictReader(open(\"$tmp/as_run/stats.csv\"))]

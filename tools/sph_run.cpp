@@ -66,7 +66,7 @@ void install_stop_handlers() {
 constexpr const char* kHelpFooter = R"(
 Outputs (in --out, default out/<scene name>):
   run.json                  the run that owns the folder (id, scene, pid); .sph-run.lock while it runs
-  scene.json                the scene as run, every override applied (sph-run DIR/scene.json runs it again)
+  scene_as_run.json         the scene as run, every override applied (sph-run DIR/scene_as_run.json --out NEW runs it again)
   stats.csv                 one row per step; summary.json at the end (also when stopped early)
   frames/frame_NNNNN.EXT    particle frames, EXT per output.format (vtu, bgeo, ply); --no-frames for none
   surface/surface_NNNNN.EXT the fluid surface: .vdb level set (format vdb), .ply mesh (format mesh)

@@ -179,7 +179,7 @@ Motion linear_motion(const Vec3d& velocity) {
 Motion sinusoidal_motion(const Vec3d& axis, double amplitude, double period, double phase) {
     Motion m;
     m.type = MotionType::Sinusoidal;
-    m.axis = axis.normalized();
+    m.axis = unit(axis);
     m.amplitude = amplitude;
     m.period = period;
     m.phase = phase;
@@ -201,10 +201,10 @@ Motion circle_motion(const Vec3d& center, double radius, const Vec3d& axis, doub
     m.type = MotionType::Circle;
     m.center = center;
     m.radius = radius;
-    m.axis = axis.normalized();
+    m.axis = unit(axis);
     m.speed = speed;
     const Vec3d rel = start_point - center;
-    m.start = (rel - rel.dot(m.axis) * m.axis).normalized();
+    m.start = unit(rel - rel.dot(m.axis) * m.axis);
     return m;
 }
 

@@ -148,7 +148,7 @@ public:
                 d.diameter = number(p, path, "diameter", 0, false, "a number > 0 (metres)", 0.0);
                 d.normal = vec3(p, path, "normal", std::nullopt);
                 if (!(d.normal.norm() > 0)) fail(path + "/normal", p["normal"], "a non-zero vector (the wall's normal at the sensor)");
-                d.normal.normalize();
+                d.normal = unit(d.normal);
             }
         } else if (type == "height") {
             d.type = ProbeType::Height;
@@ -169,7 +169,7 @@ public:
                      ctx + " by neighbours");
                 d.direction = vec3(p, path, "direction", Vec3d(1, 0, 0));
                 if (!(d.direction.norm() > 0)) fail(path + "/direction", p["direction"], "a direction, not all zero");
-                d.direction.normalize();
+                d.direction = unit(d.direction);
                 const double k = number(p, path, "min_neighbours", 0, true, "an integer >= 0", 4.0);
                 if (k != std::floor(k) || k > 1000) fail(path + "/min_neighbours", p["min_neighbours"], "an integer >= 0");
                 d.min_neighbours = int(k);

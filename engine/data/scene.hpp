@@ -412,9 +412,11 @@ std::string read_scene_file(const std::filesystem::path& file);
 Scene parse_scene(const std::string& text, const std::string& file,
                   const std::vector<std::pair<std::string, nlohmann::json>>& overrides = {});
 
-/// @brief The scene as a scene file that loads back into an equal Scene (docs/usage.md, "Scene
-/// files"): every value written out, an optional key only when set, a method's own sections only,
-/// a mesh inline (`vertices`, `triangles`) whatever file it was read from.
+/// @brief The scene as a scene file (scenes/README.md): every value written out, an optional key
+/// only when set, a method's own sections only, a mesh inline (`vertices`, `triangles`) whatever
+/// file it was read from. It loads back into an equal Scene but for `source` and a mesh's `file`
+/// (and for values the loader derives, e.g. a cylinder's box, when a scene built in code set
+/// them otherwise).
 nlohmann::json scene_to_json(const Scene& scene);
 
 /// @brief Checks a scene built or changed in code against every rule the loader applies to a

@@ -754,10 +754,11 @@ class Reader {
             const json* f = n.find("file");
             const char* what = "a path to a Wavefront OBJ file (relative to the scene file)";
             const json* inline_vertices = n.find("vertices");
-            if (f && inline_vertices)
-                fail_at(child(n.path, "vertices"), dump(*inline_vertices),
-                        "no vertices beside a file: a mesh is an OBJ file or vertices and triangles",
-                        {child(n.path, "vertices"), child(n.path, "file")});
+            for (const char* key : {"vertices", "triangles"})
+                if (const json* v = n.find(key); f && v)
+                    fail_at(child(n.path, key), dump(*v),
+                            std::string("no ") + key + " beside a file: a mesh is an OBJ file or vertices and triangles",
+                            {child(n.path, key), child(n.path, "file")});
             if (!f && !inline_vertices)
                 fail(child(n.path, "file"), "nothing", std::string(what) + ", or vertices and triangles");
             double scale = 1.0;
@@ -796,12 +797,12 @@ class Reader {
         return b;
     }
 
-    /// A mesh given in the scene: `vertices`, at least 3 points (metres), and `triangles`, at
-    /// least one triple of vertex indices (0-based), each index below the vertex count.
+    /// A mesh given in the scene, with the rules of an OBJ file: `vertices`, points (metres), and
+    /// `triangles`, at least one triple of vertex indices (0-based), each below the vertex count.
     void read_inline_mesh(const Node& n, BoundaryDesc& b) const {
         const json& v = *n.find("vertices");
         const Node vn = n.at(v, "vertices");
-        if (!v.is_array() || v.size() < 3) fail(vn.path, dump(v), "an array of at least 3 points, each an array of 3 numbers (metres)");
+        if (!v.is_array() || v.empty()) fail(vn.path, dump(v), "an array of points, each an array of 3 numbers (metres)");
         for (std::size_t i = 0; i < v.size(); ++i) b.vertices.push_back(vec3({v[i], child(vn.path, i)}, "metres"));
         const std::string what = "an array of at least one triangle, each an array of 3 vertex indices from 0 to " +
                                  std::to_string(v.size() - 1);
@@ -838,7 +839,7 @@ class Reader {
         const Node a = obj.at(*v, key);
         const Vec3d d = vec3(a, "a direction; it is normalised");
         if (!(d.norm() > 0) || !std::isfinite(d.norm())) fail(a.path, dump(a.value), what);
-        return d.normalized();
+        return unit(d);
     }
 
     /// A kinematic motion (engine/motion.hpp); `body` is the boundary it moves (a circle

@@ -96,7 +96,7 @@ json probe_json(const ProbeDesc& d) {
         case ProbeType::Pressure:
             j["point"] = vec(d.point);
             j["source"] = source_name(d.source);
-            if (d.source == PressureSource::Boundary && d.radius > 0) j["radius"] = d.radius;
+            if (d.source == PressureSource::Boundary && d.radius != 0) j["radius"] = d.radius;  // 0: the default
             if (d.source == PressureSource::Sensor) j["diameter"] = d.diameter, j["normal"] = vec(d.normal);
             break;
         case ProbeType::Height:
@@ -180,7 +180,8 @@ nlohmann::json scene_to_json(const Scene& s) {
         for (const EmitterDesc& e : s.emitters) {
             json em{{"position", vec(e.position)}, {"velocity", vec(e.velocity)}, {"radius", e.radius},
                     {"rate", e.rate},              {"start", e.start}};
-            if (std::isfinite(e.end)) em["end"] = e.end;  // no end: emits to the run's end
+            // +inf, no end: emits to the run's end; anything else (NaN too) is checked
+            if (e.end != std::numeric_limits<double>::infinity()) em["end"] = e.end;
             if (e.max_particles != std::numeric_limits<std::uint64_t>::max()) em["max_particles"] = e.max_particles;
             emitters.push_back(std::move(em));
         }
@@ -196,7 +197,7 @@ nlohmann::json scene_to_json(const Scene& s) {
     if (o.surface.sphere_radius) surface["sphere_radius"] = *o.surface.sphere_radius;
     if (o.surface.smoothing) surface["smoothing"] = *o.surface.smoothing;
     output["surface"] = std::move(surface);
-    if (o.attributes_explicit) output["attributes"] = o.attributes;
+    if (o.attributes_explicit || o.attributes != OutputParams{}.attributes) output["attributes"] = o.attributes;
     j["output"] = std::move(output);
 
     // A method's own sections only: the loader refuses another method's.

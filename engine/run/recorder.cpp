@@ -47,7 +47,7 @@ void check_surface_formats(const World& w) {
                      "\" needs OpenVDB: this build has SPH_WITH_OPENVDB=OFF (rebuild with it ON, or choose "
                      "vtu, bgeo or ply)");
 }
-/// The scene as this run runs it (every override applied: `sph-run DIR/scene.json` runs it again),
+/// The scene as this run runs it (every override applied: `sph-run DIR/scene_as_run.json` runs it again),
 /// with the experiment files of its probes made absolute, since the file no longer sits beside them.
 void write_scene(const std::filesystem::path& dir, const Scene& scene) {
     nlohmann::json j = scene_to_json(scene);
@@ -57,7 +57,7 @@ void write_scene(const std::filesystem::path& dir, const Scene& scene) {
                 const std::filesystem::path f = probe["experiment"]["file"].get<std::string>();
                 if (f.is_relative()) probe["experiment"]["file"] = (std::filesystem::absolute(scene.source).parent_path() / f).lexically_normal().string();
             }
-    write_file_atomic(dir / "scene.json", j.dump(2) + "\n");
+    write_file_atomic(dir / "scene_as_run.json", j.dump(2) + "\n");
 }
 constexpr std::size_t kMaxPendingStats = std::size_t(4) << 20;  // bytes of rows held in memory
 /// Room kept for salvage(): the most pending stats rows, plus summary.json and probes.
@@ -171,7 +171,12 @@ Recorder::Recorder(std::filesystem::path dir, const Simulation& sim)
     check_surface_formats(sim.world());
     std::filesystem::create_directories(m_dir);
     reserve_space();
-    write_scene(m_dir, sim.world().scene);
+    try {  // a constructor that throws runs no destructor: the reserve is removed here
+        write_scene(m_dir, sim.world().scene);
+    } catch (...) {
+        release_reserve();
+        throw;
+    }
     m_pending = header(sim);
     m_t0 = std::chrono::steady_clock::now();
 }
@@ -181,7 +186,12 @@ Recorder::Recorder(std::filesystem::path dir, const Simulation& sim, const nlohm
     check_surface_formats(sim.world());
     std::filesystem::create_directories(m_dir);
     reserve_space();
-    write_scene(m_dir, sim.world().scene);
+    try {  // a constructor that throws runs no destructor: the reserve is removed here
+        write_scene(m_dir, sim.world().scene);
+    } catch (...) {
+        release_reserve();
+        throw;
+    }
     m_frame = st.at("frame").get<std::size_t>();
     m_start_steps = sim.steps();
     m_first_frame = st.value("first_frame", std::size_t(0));  // absent before 2026-12-06: 0

@@ -26,7 +26,7 @@ namespace fs = std::filesystem;
 constexpr const char* kMarker = "run.json";
 constexpr const char* kLock = ".sph-run.lock";
 /// What sph-run writes into its folder (and so may remove again).
-constexpr const char* kOutputs[] = {"scene.json", "stats.csv", "summary.json", "frames", "frames.pvd", "boundary",
+constexpr const char* kOutputs[] = {"scene_as_run.json", "stats.csv", "summary.json", "frames", "frames.pvd", "boundary",
                                     "boundary_moving.pvd", "probes", "checkpoints", "surface", ".sph-reserve"};
 
 std::string list_outputs(const fs::path& dir) {

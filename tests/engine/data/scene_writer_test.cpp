@@ -81,30 +81,26 @@ TEST(SceneWriter, ASceneWithEveryKindOfEntryLoadsBackEqual) {
     BoundaryDesc box;
     box.shape = BoundaryShape::Box;
     box.box = Aabb{Vec3d(0.4, 0.3, 0.4), Vec3d(0.5, 0.4, 0.5)};
-    // An axis the loader's normalisation leaves as it is (it normalises again what
-    // sinusoidal_motion normalised: (1, 0, 1) reads back an ulp apart).
-    box.motion = sinusoidal_motion(Vec3d(1, 0, 0), 0.05, 0.8, 0.3);
+    // An axis off the coordinate axes: normalised by sinusoidal_motion, and read back unchanged
+    // (sph::unit keeps a unit vector as it is; normalising (1, 0, 1) twice moved it an ulp).
+    box.motion = sinusoidal_motion(Vec3d(1, 0, 1), 0.05, 0.8, 0.3);
     s.boundaries.push_back(box);
+    BoundaryDesc pushed;
+    pushed.shape = BoundaryShape::Box;
+    pushed.box = Aabb{Vec3d(0.05, 0.5, 0.05), Vec3d(0.1, 0.6, 0.1)};
+    pushed.motion = linear_motion(Vec3d(0.1, 0, 0.05));
+    s.boundaries.push_back(pushed);
     BoundaryDesc sphere;
     sphere.shape = BoundaryShape::Sphere;
     sphere.center = Vec3d(0.8, 0.6, 0.8);
     sphere.radius = 0.05;
     sphere.motion = path_motion({Vec3d(0.8, 0.6, 0.8), Vec3d(0.8, 0.7, 0.7), Vec3d(0.7, 0.7, 0.7)}, 0.2, true);
     s.boundaries.push_back(sphere);
-    BoundaryDesc cylinder;
-    cylinder.shape = BoundaryShape::Cylinder;
-    cylinder.center = Vec3d(0.2, 0.5, 0.7);
-    cylinder.axis = Vec3d(0, 1, 0);
-    cylinder.radius = 0.04;
-    cylinder.height = 0.2;
-    {  // the box the loader derives (scene_reader.cpp): base and top grown by the radius across the axis
-        const Vec3d top = cylinder.center + cylinder.height * cylinder.axis;
-        Vec3d ext;
-        for (int a = 0; a < 3; ++a) ext[a] = cylinder.radius * std::sqrt(std::max(0.0, 1.0 - cylinder.axis[a] * cylinder.axis[a]));
-        cylinder.box = Aabb{cylinder.center.cwiseMin(top) - ext, cylinder.center.cwiseMax(top) + ext};
-    }
-    cylinder.motion = circle_motion(Vec3d(0.3, 0.5, 0.7), 0.1, Vec3d(0, 1, 0), 0.3, Vec3d(0.2, 0.6, 0.7));
-    s.boundaries.push_back(cylinder);
+    // A cylinder (its box derived by the loader) carried round a circle about a tilted axis.
+    s.boundaries.push_back(parse_scene(R"({"name": "c", "fluid_blocks": [{"min": [0, 0, 0], "max": [0.1, 0.1, 0.1]}],
+        "boundaries": [{"type": "cylinder", "center": [0.2, 0.5, 0.7], "axis": [0, 1, 0], "radius": 0.04, "height": 0.2,
+                        "motion": {"type": "circle", "center": [0.3, 0.6, 0.7], "radius": 0.1, "axis": [0, 1, 0.001],
+                                   "speed": 0.3}}]})", "c").boundaries.front());
     BoundaryDesc mesh;  // one triangle, counter-clockwise seen from above
     mesh.shape = BoundaryShape::Mesh;
     mesh.vertices = {Vec3d(0.6, 0.8, 0.1), Vec3d(0.7, 0.8, 0.1), Vec3d(0.6, 0.8, 0.2)};
