@@ -2,6 +2,7 @@
 // Small scenes built in code for the tests (no scene file involved).
 #include <algorithm>
 #include <cstdint>
+#include <optional>
 #include <random>
 #include <span>
 #include <vector>
@@ -33,6 +34,15 @@ inline void he_physics(Scene& s) {
     s.fluid.kinematic_viscosity = 0.0;
 }
 
+/// A box obstacle, moving with `motion` if given.
+inline BoundaryDesc box_obstacle(const Aabb& box, std::optional<Motion> motion = {}) {
+    BoundaryDesc b;
+    b.shape = BoundaryShape::Box;
+    b.box = box;
+    b.motion = std::move(motion);
+    return b;
+}
+
 /// A fluid block in a closed container, no motion, He et al.'s physics: r = 0.01 m unless given.
 inline Scene tank_scene(Vec3d fluid_max, Vec3d box_max, double r = 0.01) {
     Scene s;
@@ -54,11 +64,7 @@ inline Scene pool_with_pushed_box() {
     Scene s = tank_scene(Vec3d(0.4, 0.12, 0.12), Vec3d(0.4, 0.25, 0.12), 0.005);
     s.simulation.stepping.mode = SteppingMode::Binned;
     s.simulation.stepping.acoustic = false;
-    BoundaryDesc box;
-    box.shape = BoundaryShape::Box;
-    box.box = Aabb{Vec3d(0.10, 0.04, 0.03), Vec3d(0.14, 0.20, 0.07)};
-    box.motion = linear_motion(Vec3d(0.5, 0, 0));
-    s.boundaries.push_back(box);
+    s.boundaries.push_back(box_obstacle(Aabb{Vec3d(0.10, 0.04, 0.03), Vec3d(0.14, 0.20, 0.07)}, linear_motion(Vec3d(0.5, 0, 0))));
     return s;
 }
 

@@ -78,18 +78,12 @@ TEST(SceneWriter, ASceneWithEveryKindOfEntryLoadsBackEqual) {
     s.fluid.pressure_gradient = PressureGradient::Corrected;
     s.fluid_blocks.front().velocity = Vec3d(0.5, 0, -0.25);
     s.fluid_blocks.push_back(FluidBlock{Aabb{Vec3d(0.5, 0, 0), Vec3d(0.7, 0.1, 0.2)}, Vec3d::Zero(), true});
-    BoundaryDesc box;
-    box.shape = BoundaryShape::Box;
-    box.box = Aabb{Vec3d(0.4, 0.3, 0.4), Vec3d(0.5, 0.4, 0.5)};
     // An axis off the coordinate axes: normalised by sinusoidal_motion, and read back unchanged
     // (sph::unit keeps a unit vector as it is; normalising (1, 0, 1) twice moved it an ulp).
-    box.motion = sinusoidal_motion(Vec3d(1, 0, 1), 0.05, 0.8, 0.3);
-    s.boundaries.push_back(box);
-    BoundaryDesc pushed;
-    pushed.shape = BoundaryShape::Box;
-    pushed.box = Aabb{Vec3d(0.05, 0.5, 0.05), Vec3d(0.1, 0.6, 0.1)};
-    pushed.motion = linear_motion(Vec3d(0.1, 0, 0.05));
-    s.boundaries.push_back(pushed);
+    s.boundaries.push_back(test::box_obstacle(Aabb{Vec3d(0.4, 0.3, 0.4), Vec3d(0.5, 0.4, 0.5)},
+                                              sinusoidal_motion(Vec3d(1, 0, 1), 0.05, 0.8, 0.3)));
+    s.boundaries.push_back(test::box_obstacle(Aabb{Vec3d(0.05, 0.5, 0.05), Vec3d(0.1, 0.6, 0.1)},
+                                              linear_motion(Vec3d(0.1, 0, 0.05))));
     BoundaryDesc sphere;
     sphere.shape = BoundaryShape::Sphere;
     sphere.center = Vec3d(0.8, 0.6, 0.8);
