@@ -40,6 +40,14 @@ a = [[r[c] for c in cols] for r in csv.DictReader(open(\"$tmp/as_run/stats.csv\"
 b = [[r[c] for c in cols] for r in csv.DictReader(open(\"$tmp/again/stats.csv\"))]
 sys.exit(0 if len(a) > 20 and a == b else 1)"'
 
+# A scene given by a relative path from elsewhere: its probes' experiment files (relative to the
+# scene's folder) are written as absolute paths that exist.
+(cd "$src/scenes/.." && "$run" scenes/martin_moyce.json --end 0.005 --no-frames --out "$tmp/mm" -q); rc=$?
+check "scene_as_run.json's experiment files are absolute and exist (got $rc)" '[ $rc -eq 0 ] && python3 -c "
+import json, os, sys
+files = [p[\"experiment\"][\"file\"] for p in json.load(open(\"$tmp/mm/scene_as_run.json\"))[\"probes\"] if \"experiment\" in p]
+sys.exit(0 if files and all(os.path.isabs(f) and os.path.isfile(f) for f in files) else 1)"'
+
 # 3. A short good run writes stats.csv, summary.json, frames and the graph.
 "$run" "$src/scenes/dam_break.json" --end 0.05 --out "$tmp/good" --graph "$tmp/g.dot" -q; rc=$?
 check "short run exits 0 (got $rc)" '[ $rc -eq 0 ]'
