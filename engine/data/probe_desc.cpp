@@ -40,8 +40,10 @@ class ProbeReader {
 public:
     ProbeReader(const std::string& file) : m_file(file) {}
 
+    /// The `found` of a key that is not there (a null there is shown as null).
+    static json missing() { return json(json::value_t::discarded); }
     [[noreturn]] void fail(const std::string& path, const json& found, const std::string& expected) const {
-        std::string f = found.is_null() ? "nothing" : found.dump();
+        std::string f = found.is_discarded() ? "nothing" : found.dump();
         if (f.size() > 80) f = f.substr(0, 77) + "...";
         throw SceneError(m_file, path, f, expected);
     }
@@ -62,7 +64,7 @@ public:
         const auto it = obj.find(key);
         if (it == obj.end()) {
             if (fallback) return *fallback;
-            fail(path + "/" + key, json(), what);
+            fail(path + "/" + key, missing(), what);
         }
         if (!it->is_number() || !std::isfinite(it->get<double>())) fail(path + "/" + key, *it, what);
         const double x = it->get<double>();
@@ -74,7 +76,7 @@ public:
         const auto it = obj.find(key);
         if (it == obj.end()) {
             if (fallback) return *fallback;
-            fail(path + "/" + key, json(), what);
+            fail(path + "/" + key, missing(), what);
         }
         if (!it->is_array() || it->size() != 3) fail(path + "/" + key, *it, what);
         Vec3d v;
@@ -92,7 +94,7 @@ public:
         const auto it = obj.find(key);
         if (it == obj.end()) {
             if (fallback) return fallback;
-            fail(path + "/" + key, json(), "one of " + list);
+            fail(path + "/" + key, missing(), "one of " + list);
         }
         if (!it->is_string()) fail(path + "/" + key, *it, "one of " + list);
         const std::string s = it->get<std::string>();
@@ -107,7 +109,7 @@ public:
         ProbeExperiment x;
         const auto f = e.find("file");
         if (f == e.end() || !f->is_string() || f->get<std::string>().empty())
-            fail(path + "/file", f == e.end() ? json() : *f, "a CSV file name, relative to the scene file");
+            fail(path + "/file", f == e.end() ? missing() : *f, "a CSV file name, relative to the scene file");
         x.file = f->get<std::string>();
         x.t_scale = number(e, path, "t_scale", 0, false, "a number > 0 (1/s: T = t * t_scale)", 1.0);
         x.value_scale = number(e, path, "value_scale", 0, false, "a number > 0 (Z = (value - value_offset) * value_scale)", 1.0);
@@ -144,7 +146,7 @@ public:
                 for (const char* k : {"diameter", "normal"})
                     if (p.contains(k)) fail(path + "/" + k, p[k], std::string("no ") + k + " unless source is \"sensor\"");
             } else {
-                if (!p.contains("diameter")) fail(path + "/diameter", json(), "the sensor face's diameter (a number > 0, metres)");
+                if (!p.contains("diameter")) fail(path + "/diameter", missing(), "the sensor face's diameter (a number > 0, metres)");
                 d.diameter = number(p, path, "diameter", 0, false, "a number > 0 (metres)", 0.0);
                 d.normal = vec3(p, path, "normal", std::nullopt);
                 if (!(d.normal.norm() > 0)) fail(path + "/normal", p["normal"], "a non-zero vector (the wall's normal at the sensor)");

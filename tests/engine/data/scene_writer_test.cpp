@@ -172,6 +172,12 @@ TEST(SceneWriter, ValidateRefusesACodeBuiltSceneWithTheLoadersMessage) {
     EXPECT_EQ(refusal(s), at + "/simulation/gravity/1: found null, expected a number (m/s^2)");
 
     s = good;
+    s.probes.push_back(ProbeDesc{});
+    s.probes.back().name = "totals";
+    s.probes.back().rate = std::numeric_limits<double>::quiet_NaN();  // a key that is there, null
+    EXPECT_EQ(refusal(s), at + "/probes/0/rate: found null, expected a number > 0 (samples per simulated second)");
+
+    s = good;
     s.fluid_blocks.front().box.max = Vec3d(0.1, 0.3, 0.1);
     EXPECT_EQ(refusal(s), at + "/fluid_blocks/0: found {\"hydrostatic\":false,\"max\":[0.1,0.3,0.1],\"min\":[0.0,0.0,0.0],"
                                "\"velocity\":[0.0,..., expected a block inside the container /boundaries/0 "
