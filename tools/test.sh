@@ -48,7 +48,7 @@ export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1:suppressions=$PWD/tests
 export TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:suppressions=$PWD/tests/tsan.supp"
 # The long physics runs and end-to-end scripts (stage 1 runs them); the validation and PCISPH
 # smoothness runs are tens of seconds in Release and several minutes under ASan.
-long='RunRobustnessCli|ParaViewReadsRun|BlenderImportsRun|Hydrostatic|DamBreak|Stirring\.Pushed|MillionSteps|EqualStepsReproduceGlobal|InstallAndConsume|SphRunCli|ToolsPlots|CheckpointCli|ModeAgreement|MartinMoyce|KoshizukaOka|PcisphSmoothness|SphStudy|ResolutionStudy|StandingWave|WallEnergy'
+long='RunRobustnessCli|SteppingBound|ParaViewReadsRun|BlenderImportsRun|Hydrostatic|DamBreak|Stirring\.Pushed|MillionSteps|EqualStepsReproduceGlobal|InstallAndConsume|SphRunCli|ToolsPlots|CheckpointCli|ModeAgreement|MartinMoyce|KoshizukaOka|PcisphSmoothness|SphStudy|ResolutionStudy|StandingWave|WallEnergy'
 
 stage "2/4 AddressSanitizer + UndefinedBehaviorSanitizer: unit tests"
 # The test sources at -O0 (SPH_TEST_FLAGS; the engine stays at -O1): 13 % less build time for

@@ -120,8 +120,12 @@ Wave run_wave(double r, bool continuity, double alpha, double nu, double end, do
 // every loop scalar: the fit over six extrema of a 8 mm amplitude reads a 3 % change of the last
 // amplitude as 20 % of the rate. The 20 % is asserted at 5 mm (the disabled test below).
 // The symmetric runs hold what is measured, so that a change that adds dissipation or detunes
-// the wave fails: period within 8 %, the extrapolated walls' decay at most 6x laminar, half the
-// alpha = 0.1 run's (measured 0.31) and half the mirrored walls' (0.40).
+// the wave fails: period within 8 %, the extrapolated walls' decay at most 6x laminar and at most
+// 0.6 of the alpha = 0.1 run's and of the mirrored walls'. Since 2026-12-07 these three runs last
+// 1.7 periods (three extrema) instead of 3.2, a quarter off the test's time; measured then: the
+// symmetric run 4.30x laminar (4.31x over 3.2 periods), the mirrored walls 9.94x (10.1x), alpha 0.1
+// 9.22x with its period -5.1 % (over 3.2 periods it read 32x and -47 %: its wave is gone by the
+// second period and the fit follows the noise), so the ratios are 0.47 and 0.43.
 TEST(StandingWave, PeriodAndDecayAgainstLinearTheory) {
     const double k = std::numbers::pi / kL, omega = std::sqrt(kG * k * std::tanh(k * kDepth));
     const double period = 2 * std::numbers::pi / omega;
@@ -129,9 +133,11 @@ TEST(StandingWave, PeriodAndDecayAgainstLinearTheory) {
     const double decay = 2 * nu * k * k;
     std::printf("linear theory: period %.4f s, decay %.4f 1/s\n", period, decay);
     const Wave corrected = run_wave(0.01, true, 0.0, nu, 3.2 * period, 1.5, {}, PressureGradient::Corrected);
-    const Wave w = run_wave(0.01, true, 0.0, nu, 3.2 * period, 1.5);
-    const Wave mirrored = run_wave(0.01, true, 0.0, nu, 3.2 * period, 1.5, WallPressure::Mirrored);
-    const Wave old = run_wave(0.01, false, 0.1, 0.0, 3.2 * period, 1.5);
+    // The comparison runs decay 4-30x faster than the laminar rate, so 1.7 periods (three
+    // extrema, 5-60 % of the amplitude lost) measure their rates; 3.2 would add half their cost.
+    const Wave w = run_wave(0.01, true, 0.0, nu, 1.7 * period, 1.5);
+    const Wave mirrored = run_wave(0.01, true, 0.0, nu, 1.7 * period, 1.5, WallPressure::Mirrored);
+    const Wave old = run_wave(0.01, false, 0.1, 0.0, 1.7 * period, 1.5);
     for (const Wave* x : {&corrected, &w, &mirrored, &old})
         std::printf("period %+.2f %%, decay %.2f x the laminar prediction of nu = %.0e\n", 100 * (x->period / period - 1),
                     x->decay / decay, nu);
@@ -139,13 +145,15 @@ TEST(StandingWave, PeriodAndDecayAgainstLinearTheory) {
     ASSERT_GE(corrected.extrema, 5);
     EXPECT_NEAR(corrected.period / period, 1.0, 0.03);
     EXPECT_NEAR(corrected.decay / decay, 1.0, 0.4);
-    ASSERT_GE(w.crossings, 5);
-    ASSERT_GE(w.extrema, 5);
+    for (const Wave* x : {&w, &mirrored, &old}) {
+        ASSERT_GE(x->crossings, 3);
+        ASSERT_GE(x->extrema, 3);
+    }
     EXPECT_NEAR(w.period / period, 1.0, 0.08);
     EXPECT_GT(w.decay, decay);
     EXPECT_LT(w.decay, 6 * decay);
-    EXPECT_LT(w.decay, 0.5 * old.decay);
-    EXPECT_LT(w.decay, 0.5 * mirrored.decay);
+    EXPECT_LT(w.decay, 0.6 * old.decay);
+    EXPECT_LT(w.decay, 0.6 * mirrored.decay);
 }
 
 // The same wave at r = 5 mm (50 particles deep, 50,000 particles; about 7 minutes on 2 cores,
