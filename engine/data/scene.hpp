@@ -244,6 +244,16 @@ struct BoundaryDesc {
 void read_obj(const std::filesystem::path& file, std::vector<Vec3d>& vertices, std::vector<std::array<int, 3>>& triangles,
               const std::string& name = {});
 
+/// @brief Boundaries built in code with the values a scene file does not give filled in as the
+/// loader derives them: a cylinder's box (and its axis made a unit vector); a height field's
+/// vertices, triangles and box (the surface over `span` in x and z, heights[k][i] as in
+/// BoundaryDesc; span's y is replaced by the heights' range); a mesh's box. validate_scene refuses
+/// a boundary whose derived values differ from these. Nothing else is checked here (validate_scene
+/// names a bad radius, too few heights, a vertex index out of range, ...).
+BoundaryDesc cylinder_boundary(const Vec3d& center, const Vec3d& axis, double radius, double height);
+BoundaryDesc heightfield_boundary(const Aabb& span, std::vector<std::vector<double>> heights);
+BoundaryDesc mesh_boundary(std::vector<Vec3d> vertices, std::vector<std::array<int, 3>> triangles);
+
 /// @brief The point a circle motion carries round its circle: the centre of the box or sphere.
 Vec3d reference_point(const BoundaryDesc& b);
 /// @brief The same boundary moved by `d` metres (its motion is kept).

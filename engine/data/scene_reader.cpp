@@ -32,6 +32,24 @@ using namespace scene_detail;
 
 namespace {
 
+// A cylinder's bounding box: its two cap discs' extents around the base and top centres.
+Aabb cylinder_box(const BoundaryDesc& b) {
+    const Vec3d top = b.center + b.height * b.axis;
+    Vec3d ext;
+    for (int a = 0; a < 3; ++a) ext[a] = b.radius * std::sqrt(std::max(0.0, 1.0 - b.axis[a] * b.axis[a]));
+    return Aabb{b.center.cwiseMin(top) - ext, b.center.cwiseMax(top) + ext};
+}
+
+// The bounding box of a mesh's vertices.
+Aabb vertices_box(const std::vector<Vec3d>& vertices) {
+    Aabb box{Vec3d::Constant(std::numeric_limits<double>::max()), Vec3d::Constant(std::numeric_limits<double>::lowest())};
+    for (const auto& v : vertices) {
+        box.min = box.min.cwiseMin(v);
+        box.max = box.max.cwiseMax(v);
+    }
+    return box;
+}
+
 // Two triangles per cell, front (counter-clockwise) side up: the fluid is above a heightfield.
 void heightfield_triangles(const Aabb& span, BoundaryDesc& b) {
     const int nz = int(b.heights.size()), nx = int(b.heights[0].size());
@@ -725,10 +743,7 @@ class Reader {
             b.axis = direction(n, "axis");
             b.radius = required_number(n, "radius", positive("metres"));
             b.height = required_number(n, "height", positive("metres"));
-            const Vec3d top = b.center + b.height * b.axis;
-            Vec3d ext;
-            for (int a = 0; a < 3; ++a) ext[a] = b.radius * std::sqrt(std::max(0.0, 1.0 - b.axis[a] * b.axis[a]));
-            b.box = Aabb{b.center.cwiseMin(top) - ext, b.center.cwiseMax(top) + ext};
+            b.box = cylinder_box(b);
         } else if (b.shape == BoundaryShape::Heightfield) {
             check_keys(n, k_heightfield_boundary_keys, context);
             const Aabb span = read_box(n, true);
@@ -783,12 +798,7 @@ class Reader {
                 read_inline_mesh(n, b);
             }
             for (auto& v : b.vertices) v = scale * v + translate;
-            b.box = Aabb{Vec3d::Constant(std::numeric_limits<double>::max()),
-                         Vec3d::Constant(std::numeric_limits<double>::lowest())};
-            for (const auto& v : b.vertices) {
-                b.box.min = b.box.min.cwiseMin(v);
-                b.box.max = b.box.max.cwiseMax(v);
-            }
+            b.box = vertices_box(b.vertices);
         } else {
             check_keys(n, k_boxlike_boundary_keys, context);
             b.box = read_box(n);
@@ -1170,6 +1180,37 @@ Scene parse_scene(const std::string& text, const std::string& file,
         cli_paths.push_back(apply_override(doc, pointer_tokens(pointer, file), value, file));
     }
     return Reader(file, doc, std::move(cli_paths)).read();
+}
+
+BoundaryDesc cylinder_boundary(const Vec3d& center, const Vec3d& axis, double radius, double height) {
+    BoundaryDesc b;
+    b.shape = BoundaryShape::Cylinder;
+    b.center = center;
+    b.axis = axis.squaredNorm() > 0 ? unit(axis) : axis;  // a zero axis is left for validate_scene to name
+    b.radius = radius;
+    b.height = height;
+    b.box = cylinder_box(b);
+    return b;
+}
+
+BoundaryDesc heightfield_boundary(const Aabb& span, std::vector<std::vector<double>> heights) {
+    BoundaryDesc b;
+    b.shape = BoundaryShape::Heightfield;
+    b.heights = std::move(heights);
+    b.box = span;
+    const bool grid = b.heights.size() >= 2 && b.heights[0].size() >= 2 &&
+                      std::all_of(b.heights.begin(), b.heights.end(), [&](const auto& r) { return r.size() == b.heights[0].size(); });
+    if (grid) heightfield_triangles(span, b);  // otherwise validate_scene names the heights
+    return b;
+}
+
+BoundaryDesc mesh_boundary(std::vector<Vec3d> vertices, std::vector<std::array<int, 3>> triangles) {
+    BoundaryDesc b;
+    b.shape = BoundaryShape::Mesh;
+    b.vertices = std::move(vertices);
+    b.triangles = std::move(triangles);
+    b.box = vertices_box(b.vertices);
+    return b;
 }
 
 }  // namespace sph

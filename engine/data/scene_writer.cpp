@@ -2,11 +2,14 @@
 /// @brief A Scene as the scene file that loads back into it (scene_to_json), and the loader's
 /// checks for a scene built or changed in code (validate_scene): the scene written out and read
 /// back by parse_scene, so that one set of rules, with one set of messages, covers both.
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <string>
 
+#include "engine/core/errors.hpp"
 #include "engine/data/scene.hpp"
+#include "engine/data/scene_detail.hpp"
 
 namespace sph {
 
@@ -237,12 +240,78 @@ nlohmann::json scene_to_json(const Scene& s) {
     return j;
 }
 
+namespace {
+
+/// Equal to 1e-12 relative (or 1e-12 m near zero): a value derived in code by another order of
+/// the same operations passes, a stale or unset one does not.
+bool near(double a, double b) {
+    return std::abs(a - b) <= 1e-12 * std::max({1.0, std::abs(a), std::abs(b)});
+}
+bool near(const Vec3d& a, const Vec3d& b) {
+    return near(a.x(), b.x()) && near(a.y(), b.y()) && near(a.z(), b.z());
+}
+bool near(const Aabb& a, const Aabb& b) {
+    return near(a.min, b.min) && near(a.max, b.max);
+}
+std::string box_text(const Aabb& b) {
+    return "min " + scene_detail::fmt_vec(b.min) + ", max " + scene_detail::fmt_vec(b.max);
+}
+
+/// The values of boundary k that a scene file does not hold (the loader derives them) against
+/// those the loader derived from the rest (`back`): a cylinder's box, a height field's vertices,
+/// triangles and box, a mesh's box, a circle motion's start.
+void check_derived(const std::string& label, std::size_t k, const BoundaryDesc& b, const BoundaryDesc& back) {
+    const std::string at = "/boundaries/" + std::to_string(k);
+    const std::string shape = to_string(b.shape);
+    const auto refuse = [&](const std::string& path, const std::string& found, const std::string& expected) {
+        throw SceneError(label, path, found, expected);
+    };
+    switch (b.shape) {
+        case BoundaryShape::Cylinder:
+            if (!near(b.box, back.box))
+                refuse(at, "a cylinder whose box is " + box_text(b.box),
+                       "the box its center, axis, radius and height give, " + box_text(back.box) +
+                           " (sph::cylinder_boundary fills it)");
+            break;
+        case BoundaryShape::Heightfield: {
+            bool same = b.vertices.size() == back.vertices.size() && b.triangles == back.triangles;
+            for (std::size_t i = 0; same && i < b.vertices.size(); ++i) same = near(b.vertices[i], back.vertices[i]);
+            if (!same)
+                refuse(at, "a heightfield with " + std::to_string(b.vertices.size()) + " vertices and " +
+                               std::to_string(b.triangles.size()) + " triangles that are not its heights' surface",
+                       "the " + std::to_string(back.vertices.size()) + " vertices and " +
+                           std::to_string(back.triangles.size()) +
+                           " triangles its heights give over its box in x and z (sph::heightfield_boundary builds them)");
+            if (!near(b.box, back.box))
+                refuse(at, "a heightfield whose box is " + box_text(b.box),
+                       "its x and z span with the heights' range in y, " + box_text(back.box) +
+                           " (sph::heightfield_boundary fills it)");
+            break;
+        }
+        case BoundaryShape::Mesh:
+            if (!near(b.box, back.box))
+                refuse(at, "a mesh whose box is " + box_text(b.box),
+                       "its vertices' bounding box, " + box_text(back.box) + " (sph::mesh_boundary fills it)");
+            break;
+        default:
+            break;
+    }
+    if (b.motion && back.motion && b.motion->type == MotionType::Circle && !near(b.motion->start, back.motion->start))
+        refuse(at + "/motion", "a circle whose start direction is " + scene_detail::fmt_vec(b.motion->start),
+               scene_detail::fmt_vec(back.motion->start) + ", the direction of the " + shape +
+                   "'s reference point from the circle's centre in its plane (sph::circle_motion with "
+                   "sph::reference_point of the boundary gives it)");
+}
+
+}  // namespace
+
 void validate_scene(const Scene& scene) {
     // Non-finite numbers have no JSON form (nlohmann writes null): the loader then names the key
     // and says what it expected, as for a file that held null there.
     const std::string label =
         scene.source.empty() ? "scene \"" + scene.name + "\" (built in code)" : scene.source.string() + " (changed in code)";
-    (void)parse_scene(scene_to_json(scene).dump(), label);
+    const Scene back = parse_scene(scene_to_json(scene).dump(), label);
+    for (std::size_t k = 0; k < scene.boundaries.size(); ++k) check_derived(label, k, scene.boundaries[k], back.boundaries[k]);
 }
 
 }  // namespace sph

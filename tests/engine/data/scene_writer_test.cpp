@@ -90,17 +90,13 @@ TEST(SceneWriter, ASceneWithEveryKindOfEntryLoadsBackEqual) {
     sphere.radius = 0.05;
     sphere.motion = path_motion({Vec3d(0.8, 0.6, 0.8), Vec3d(0.8, 0.7, 0.7), Vec3d(0.7, 0.7, 0.7)}, 0.2, true);
     s.boundaries.push_back(sphere);
-    // A cylinder (its box derived by the loader) carried round a circle about a tilted axis.
-    s.boundaries.push_back(parse_scene(R"({"name": "c", "fluid_blocks": [{"min": [0, 0, 0], "max": [0.1, 0.1, 0.1]}],
-        "boundaries": [{"type": "cylinder", "center": [0.2, 0.5, 0.7], "axis": [0, 1, 0], "radius": 0.04, "height": 0.2,
-                        "motion": {"type": "circle", "center": [0.3, 0.6, 0.7], "radius": 0.1, "axis": [0, 1, 0.001],
-                                   "speed": 0.3}}]})", "c").boundaries.front());
-    BoundaryDesc mesh;  // one triangle, counter-clockwise seen from above
-    mesh.shape = BoundaryShape::Mesh;
-    mesh.vertices = {Vec3d(0.6, 0.8, 0.1), Vec3d(0.7, 0.8, 0.1), Vec3d(0.6, 0.8, 0.2)};
-    mesh.triangles = {{0, 2, 1}};
-    mesh.box = Aabb{Vec3d(0.6, 0.8, 0.1), Vec3d(0.7, 0.8, 0.2)};
-    s.boundaries.push_back(mesh);
+    // A cylinder (its box derived as the loader derives it) carried round a circle about a tilted
+    // axis, starting at its reference point.
+    BoundaryDesc cylinder = cylinder_boundary(Vec3d(0.2, 0.5, 0.7), Vec3d(0, 1, 0), 0.04, 0.2);
+    cylinder.motion = circle_motion(Vec3d(0.3, 0.6, 0.7), 0.1, Vec3d(0, 1, 0.001), 0.3, reference_point(cylinder));
+    s.boundaries.push_back(cylinder);
+    // One triangle, counter-clockwise seen from above.
+    s.boundaries.push_back(mesh_boundary({Vec3d(0.6, 0.8, 0.1), Vec3d(0.7, 0.8, 0.1), Vec3d(0.6, 0.8, 0.2)}, {{0, 2, 1}}));
     for (ProbeDesc d : {ProbeDesc{}, ProbeDesc{}, ProbeDesc{}, ProbeDesc{}, ProbeDesc{}, ProbeDesc{}, ProbeDesc{}}) {
         d.name = "p" + std::to_string(s.probes.size());
         s.probes.push_back(d);
@@ -126,9 +122,9 @@ TEST(SceneWriter, ASceneWithEveryKindOfEntryLoadsBackEqual) {
 
     // A height field replaces the mesh (the loader derives its vertices, triangles and box).
     Scene hf = load_scene(SPH_SOURCE_DIR "/scenes/dam_break.json");
-    hf.boundaries.push_back(parse_scene(R"({"name": "h", "fluid_blocks": [{"min": [0, 0, 0], "max": [0.1, 0.1, 0.1]}],
-        "boundaries": [{"type": "heightfield", "min": [0.5, 0, 0], "max": [1.2, 0, 0.2],
-                        "heights": [[0, 0.1, 0.05], [0.02, 0.12, 0.07]]}]})", "h").boundaries.front());
+    hf.boundaries.push_back(heightfield_boundary(Aabb{Vec3d(0.5, 0, 0), Vec3d(1.2, 0, 0.2)},
+                                                 {{0, 0.1, 0.05}, {0.02, 0.12, 0.07}}));
+    ASSERT_EQ(refusal(hf), "accepted");
     expect_round_trip(hf, "dam_break with a height field");
 
     Scene pc = test::tank_scene(Vec3d(0.3, 0.2, 0.3), Vec3d(1.0, 1.0, 1.0));
@@ -199,4 +195,77 @@ TEST(SceneWriter, ValidateRefusesACodeBuiltSceneWithTheLoadersMessage) {
     d.simulation.end_time = 0;
     EXPECT_EQ(refusal(d), std::string(SPH_SOURCE_DIR) + "/scenes/dam_break.json (changed in code): /simulation/end_time: "
                                                         "found 0.0, expected a number > 0 (seconds)");
+}
+
+// The values a scene file does not hold, which the loader derives (a cylinder's box, a height
+// field's surface and box, a mesh's box, a circle's start): built in code by the sph:: helpers
+// they equal the loader's (the round trips above); set otherwise, or left stale after an edit,
+// they are refused naming the boundary, what was found and what the rest of it gives. Agreement
+// is to 1e-12 relative, so a value derived by another order of the same operations passes.
+TEST(SceneWriter, ValidateRefusesDerivedValuesThatDisagreeWithTheRest) {
+    const Scene good = test::tank_scene(Vec3d(0.1, 0.1, 0.1), Vec3d(1, 1, 1));
+    const std::string at = "scene \"test_tank\" (built in code): /boundaries/1";
+    const auto with = [&](const BoundaryDesc& b) {
+        Scene s = good;
+        s.boundaries.push_back(b);
+        return s;
+    };
+
+    BoundaryDesc cyl = cylinder_boundary(Vec3d(0.5, 0.2, 0.5), Vec3d(0, 2, 0), 0.1, 0.3);
+    EXPECT_EQ(cyl.axis, Vec3d(0, 1, 0));
+    EXPECT_EQ(cyl.box.min, Vec3d(0.4, 0.2, 0.4));
+    EXPECT_EQ(cyl.box.max, Vec3d(0.6, 0.5, 0.6));
+    EXPECT_EQ(refusal(with(cyl)), "accepted");
+    BoundaryDesc off = cyl;
+    off.box.max.x() += 1e-13;  // within 1e-12
+    EXPECT_EQ(refusal(with(off)), "accepted");
+    off.box.max.x() += 1e-9;
+    EXPECT_EQ(refusal(with(off)), at + ": found a cylinder whose box is min [0.4,0.2,0.4], max [0.6000000010001,0.5,0.6], "
+                                       "expected the box "
+                                       "its center, axis, radius and height give, min [0.4,0.2,0.4], max [0.6,0.5,0.6] "
+                                       "(sph::cylinder_boundary fills it)");
+    BoundaryDesc unset;  // the fields set by hand, the box forgotten
+    unset.shape = BoundaryShape::Cylinder;
+    unset.center = cyl.center, unset.axis = cyl.axis, unset.radius = cyl.radius, unset.height = cyl.height;
+    EXPECT_EQ(refusal(with(unset)), at + ": found a cylinder whose box is min [0,0,0], max [0,0,0], expected the box its "
+                                         "center, axis, radius and height give, min [0.4,0.2,0.4], max [0.6,0.5,0.6] "
+                                         "(sph::cylinder_boundary fills it)");
+
+    BoundaryDesc hf = heightfield_boundary(Aabb{Vec3d(0.2, 0, 0.2), Vec3d(0.8, 0, 0.8)}, {{0.1, 0.2}, {0.15, 0.05}});
+    EXPECT_EQ(hf.vertices.size(), 4u);
+    EXPECT_EQ(hf.triangles.size(), 2u);
+    EXPECT_EQ(hf.box.min, Vec3d(0.2, 0.05, 0.2));
+    EXPECT_EQ(hf.box.max, Vec3d(0.8, 0.2, 0.8));
+    EXPECT_EQ(refusal(with(hf)), "accepted");
+    BoundaryDesc stale = hf;
+    stale.heights[1][1] = 0.3;  // edited after the surface was built
+    EXPECT_EQ(refusal(with(stale)), at + ": found a heightfield with 4 vertices and 2 triangles that are not its heights' "
+                                         "surface, expected the 4 vertices and 2 triangles its heights give over its box "
+                                         "in x and z (sph::heightfield_boundary builds them)");
+    stale = heightfield_boundary(Aabb{Vec3d(0.2, 0, 0.2), Vec3d(0.8, 0, 0.8)}, stale.heights);
+    stale.box.max.y() = 0.2;  // the surface rebuilt, the top of the box put back by hand
+    EXPECT_EQ(refusal(with(stale)), at + ": found a heightfield whose box is min [0.2,0.1,0.2], max [0.8,0.2,0.8], expected "
+                                         "its x and z span with the heights' range in y, min [0.2,0.1,0.2], max "
+                                         "[0.8,0.3,0.8] (sph::heightfield_boundary fills it)");
+    // Too few heights: no surface is built, and the loader's rule names the heights.
+    EXPECT_EQ(refusal(with(heightfield_boundary(Aabb{Vec3d(0.2, 0, 0.2), Vec3d(0.8, 0, 0.8)}, {{0.1, 0.2}}))),
+              at + "/heights: found [[0.1,0.2]], expected an array of at least 2 rows (along z), each an array of the same "
+                   "number (>= 2) of heights (metres, along x)");
+
+    BoundaryDesc mesh = mesh_boundary({Vec3d(0.3, 0.4, 0.3), Vec3d(0.6, 0.4, 0.3), Vec3d(0.3, 0.5, 0.6)}, {{0, 2, 1}});
+    EXPECT_EQ(mesh.box.min, Vec3d(0.3, 0.4, 0.3));
+    EXPECT_EQ(mesh.box.max, Vec3d(0.6, 0.5, 0.6));
+    EXPECT_EQ(refusal(with(mesh)), "accepted");
+    mesh.vertices[1].x() = 0.7;  // moved after the box was taken
+    EXPECT_EQ(refusal(with(mesh)), at + ": found a mesh whose box is min [0.3,0.4,0.3], max [0.6,0.5,0.6], expected its "
+                                        "vertices' bounding box, min [0.3,0.4,0.3], max [0.7,0.5,0.6] "
+                                        "(sph::mesh_boundary fills it)");
+
+    BoundaryDesc rod = test::box_obstacle(Aabb{Vec3d(0.45, 0.1, 0.45), Vec3d(0.55, 0.6, 0.55)}, linear_motion(Vec3d::Zero()));
+    rod.motion = circle_motion(Vec3d(0.4, 0.3, 0.5), 0.1, Vec3d(0, 1, 0), 0.5, reference_point(rod));
+    EXPECT_EQ(refusal(with(rod)), "accepted");
+    rod.motion = circle_motion(Vec3d(0.4, 0.3, 0.5), 0.1, Vec3d(0, 1, 0), 0.5, Vec3d(0.4, 0.3, 0.9));  // not the rod's point
+    EXPECT_EQ(refusal(with(rod)), at + "/motion: found a circle whose start direction is [0,0,1], expected [1,0,0], the "
+                                       "direction of the box's reference point from the circle's centre in its plane "
+                                       "(sph::circle_motion with sph::reference_point of the boundary gives it)");
 }
