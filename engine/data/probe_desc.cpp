@@ -31,6 +31,16 @@ const char* to_string(ProbeType t) {
     return "unknown";
 }
 
+const char* to_string(PressureSource s) {
+    return s == PressureSource::Fluid ? "fluid" : s == PressureSource::Boundary ? "boundary" : "sensor";
+}
+const char* to_string(FrontMethod m) {
+    return m == FrontMethod::Neighbours ? "neighbours" : "colour";
+}
+const char* to_string(HeightMethod m) {
+    return m == HeightMethod::Column ? "column" : "highest";
+}
+
 // ---------------------------------------------------------------------------------------------
 // Parsing
 // ---------------------------------------------------------------------------------------------
@@ -135,10 +145,10 @@ public:
             d.type = ProbeType::Pressure;
             keys(p, path, {"type", "name", "rate", "experiment", "point", "source", "radius", "diameter", "normal"}, ctx);
             d.point = vec3(p, path, "point", std::nullopt);
-            const std::string source = word(p, path, "source", {"fluid", "boundary", "sensor"}, "fluid");
-            d.source = source == "fluid"      ? PressureSource::Fluid
-                       : source == "boundary" ? PressureSource::Boundary
-                                              : PressureSource::Sensor;
+            constexpr PressureSource kSources[] = {PressureSource::Fluid, PressureSource::Boundary, PressureSource::Sensor};
+            const std::string source = word(p, path, "source", {to_string(kSources[0]), to_string(kSources[1]),
+                                                                to_string(kSources[2])}, to_string(kSources[0]));
+            d.source = *std::find_if(std::begin(kSources), std::end(kSources), [&](PressureSource k) { return source == to_string(k); });
             if (d.source != PressureSource::Boundary && p.contains("radius"))
                 fail(path + "/radius", p["radius"], "no radius unless source is \"boundary\" (a sensor has a diameter)");
             d.radius = number(p, path, "radius", 0, false, "a number > 0 (metres)", 0.0);
@@ -155,7 +165,8 @@ public:
         } else if (type == "height") {
             d.type = ProbeType::Height;
             keys(p, path, {"type", "name", "rate", "experiment", "from", "to", "method"}, ctx);
-            d.height_method = word(p, path, "method", {"column", "highest"}, "column") == "column"
+            const char* column = to_string(HeightMethod::Column);
+            d.height_method = word(p, path, "method", {column, to_string(HeightMethod::Highest)}, column) == column
                                   ? HeightMethod::Column
                                   : HeightMethod::Highest;
             d.from = vec3(p, path, "from", std::nullopt);
@@ -163,7 +174,8 @@ public:
             if ((d.to - d.from).norm() <= 0) fail(path + "/to", p["to"], "a point different from \"from\"");
         } else if (type == "front") {
             d.type = ProbeType::Front;
-            d.method = word(p, path, "method", {"neighbours", "colour"}, "neighbours") == "neighbours"
+            const char* neighbours = to_string(FrontMethod::Neighbours);
+            d.method = word(p, path, "method", {neighbours, to_string(FrontMethod::Colour)}, neighbours) == neighbours
                            ? FrontMethod::Neighbours
                            : FrontMethod::Colour;
             if (d.method == FrontMethod::Neighbours) {

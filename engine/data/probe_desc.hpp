@@ -27,7 +27,11 @@ enum class FrontMethod { Neighbours, Colour };
 /// droplets and spray above do not count), or the highest wet point anywhere on the line.
 enum class HeightMethod { Column, Highest };
 
+/// @brief The scene file's word for each (the loader reads them, scene_to_json writes them).
 const char* to_string(ProbeType t);
+const char* to_string(PressureSource s);
+const char* to_string(FrontMethod m);
+const char* to_string(HeightMethod m);
 
 /// @brief Where a probe's series can be compared with measured data (read by tools/sph_study.py
 /// and the validation tests, ignored by the engine): the file's (T, Z) columns against the

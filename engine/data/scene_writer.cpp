@@ -89,31 +89,27 @@ json boundary_json(const BoundaryDesc& b) {
     return j;
 }
 
-const char* source_name(PressureSource s) {
-    return s == PressureSource::Fluid ? "fluid" : s == PressureSource::Boundary ? "boundary" : "sensor";
-}
-
 json probe_json(const ProbeDesc& d) {
     json j{{"type", to_string(d.type)}, {"name", d.name}, {"rate", d.rate}};
     switch (d.type) {
         case ProbeType::Pressure:
             j["point"] = vec(d.point);
-            j["source"] = source_name(d.source);
+            j["source"] = to_string(d.source);
             if (d.source == PressureSource::Boundary && d.radius != 0) j["radius"] = d.radius;  // 0: the default
             if (d.source == PressureSource::Sensor) j["diameter"] = d.diameter, j["normal"] = vec(d.normal);
             break;
         case ProbeType::Height:
             j["from"] = vec(d.from);
             j["to"] = vec(d.to);
-            j["method"] = d.height_method == HeightMethod::Column ? "column" : "highest";
+            j["method"] = to_string(d.height_method);
             break;
         case ProbeType::Front:
             if (d.method == FrontMethod::Neighbours) {
-                j["method"] = "neighbours";
+                j["method"] = to_string(d.method);
                 j["direction"] = vec(d.direction);
                 j["min_neighbours"] = d.min_neighbours;
             } else {
-                j["method"] = "colour";
+                j["method"] = to_string(d.method);
                 j["from"] = vec(d.from);
                 j["to"] = vec(d.to);
             }

@@ -164,7 +164,9 @@ TEST(MartinMoyceResolution, FrontWithinFivePercentAndResidualHeightErrorFalls) {
         median_eta.push_back(0.5 * (eta[2] + eta[3]));
         std::printf("  a/%.0f, lambda_c 0.36 ... 0.44: max |d eta| %.3f %.3f %.3f %.3f %.3f %.3f, median %.3f\n", n,
                     eta[0], eta[1], eta[2], eta[3], eta[4], eta[5], median_eta.back());
-        if (n == 18.0) EXPECT_LE(median_eta.back(), 0.05) << "median of the six a/18 runs";
+        if (n == 18.0) {
+            EXPECT_LE(median_eta.back(), 0.05) << "median of the six a/18 runs";
+        }
     }
     EXPECT_LT(median_eta[1], median_eta[0]) << "median max |d eta|: a/18 against a/8";
 }
