@@ -144,8 +144,14 @@ check "--resume with a scene exits 2 (got $rc)" '[ $rc -eq 2 ] && grep -q "expec
 # appended, the file left as it was.
 cp -r "$tmp/a" "$tmp/c5"; sed -i '1s/,v_mean,/,v_avg,/' "$tmp/c5/stats.csv"; cp "$tmp/c5/stats.csv" "$tmp/c5.before"
 "$run" --resume "$tmp/c5/checkpoints/$first" --out "$tmp/c5" -q 2>"$tmp/e5"; rc=$?
-check "resume into a folder whose stats.csv has other columns exits 2 naming it, the file untouched (got $rc)" \
-  '[ $rc -eq 2 ] && grep -q "c5/stats.csv: its columns differ" "$tmp/e5" && cmp -s "$tmp/c5/stats.csv" "$tmp/c5.before"'
+check "resume into a folder whose stats.csv has other columns exits 2 naming it, the file untouched, no reserve left (got $rc)" \
+  '[ $rc -eq 2 ] && grep -q "c5/stats.csv: its columns differ" "$tmp/e5" && cmp -s "$tmp/c5/stats.csv" "$tmp/c5.before" && [ ! -e "$tmp/c5/.sph-reserve" ]'
+# A stats.csv shorter than the checkpoint's (another run's folder): refused, and the 5 MiB reserve
+# the run made before reading it removed (until 2026-12-07 it was left in the folder).
+cp -r "$tmp/a" "$tmp/c6"; head -n 3 "$tmp/a/stats.csv" > "$tmp/c6/stats.csv"
+"$run" --resume "$tmp/c6/checkpoints/$first" --out "$tmp/c6" -q 2>"$tmp/e6"; rc=$?
+check "resume into a folder whose stats.csv is shorter than the checkpoint's exits 2 naming it, no reserve left (got $rc)" \
+  '[ $rc -eq 2 ] && grep -q "c6/stats.csv: holds .* bytes, expected at least the" "$tmp/e6" && [ ! -e "$tmp/c6/.sph-reserve" ]'
 
 [ $fail -eq 0 ] && echo "checkpoints, resume, SIGKILL and determinism: all checks passed"
 exit $fail

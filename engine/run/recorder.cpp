@@ -166,7 +166,7 @@ std::string Recorder::header(const Simulation& sim) const {
     return h.str();
 }
 
-Recorder::Recorder(std::filesystem::path dir, const Simulation& sim)
+Recorder::Recorder(std::filesystem::path dir, const Simulation& sim, Open)
     : m_dir(std::move(dir)), m_probes(sim.world().scene.probes) {
     check_surface_formats(sim.world());
     std::filesystem::create_directories(m_dir);
@@ -177,21 +177,17 @@ Recorder::Recorder(std::filesystem::path dir, const Simulation& sim)
         release_reserve();
         throw;
     }
-    m_pending = header(sim);
     m_t0 = std::chrono::steady_clock::now();
 }
 
+Recorder::Recorder(std::filesystem::path dir, const Simulation& sim) : Recorder(std::move(dir), sim, Open{}) {
+    m_pending = header(sim);
+}
+
+// Delegated: the object exists once Recorder(dir, sim, Open) returns, so a throw from here on
+// runs ~Recorder, which removes the reserve.
 Recorder::Recorder(std::filesystem::path dir, const Simulation& sim, const nlohmann::json& st)
-    : m_dir(std::move(dir)), m_probes(sim.world().scene.probes) {
-    check_surface_formats(sim.world());
-    std::filesystem::create_directories(m_dir);
-    reserve_space();
-    try {  // a constructor that throws runs no destructor: the reserve is removed here
-        write_scene(m_dir, sim.world().scene);
-    } catch (...) {
-        release_reserve();
-        throw;
-    }
+    : Recorder(std::move(dir), sim, Open{}) {
     m_frame = st.at("frame").get<std::size_t>();
     m_start_steps = sim.steps();
     m_first_frame = st.value("first_frame", std::size_t(0));  // absent before 2026-12-06: 0

@@ -34,6 +34,7 @@ public:
     /// @brief Continues a run from a checkpoint: `state` is what state() returned then; the
     /// first stats_bytes bytes of dir/stats.csv are kept (a fresh stats.csv is started at the
     /// checkpoint's step when the directory has none).
+    /// A bad state or a stats.csv that does not fit it throws InputError, the reserve removed.
     Recorder(std::filesystem::path dir, const Simulation& sim, const nlohmann::json& state);
     ~Recorder();  ///< removes the reserve whatever ended the run
     Recorder(const Recorder&) = delete;
@@ -70,6 +71,9 @@ public:
                                      int threads);
 
 private:
+    struct Open {};
+    /// What both constructors do first: the folder, its reserve and scene_as_run.json.
+    Recorder(std::filesystem::path dir, const Simulation& sim, Open);
     /// after_step's particle reads, one predicate each (reads_particles is their union).
     bool front_due(const World& w) const;
     bool frame_due(const World& w) const;
