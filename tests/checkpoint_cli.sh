@@ -142,10 +142,12 @@ check "truncated checkpoint exits 2 (got $rc)" '[ $rc -eq 2 ] && grep -q "(trunc
 check "--resume with a scene exits 2 (got $rc)" '[ $rc -eq 2 ] && grep -q "expected none" "$tmp/e4"'
 # A folder whose stats.csv has other columns (an older engine's, say): refused before anything is
 # appended, the file left as it was.
+# (Its scene_as_run.json, marked here as another run's, is left as it was too.)
 cp -r "$tmp/a" "$tmp/c5"; sed -i '1s/,v_mean,/,v_avg,/' "$tmp/c5/stats.csv"; cp "$tmp/c5/stats.csv" "$tmp/c5.before"
+echo '{"name": "another run"}' > "$tmp/c5/scene_as_run.json"
 "$run" --resume "$tmp/c5/checkpoints/$first" --out "$tmp/c5" -q 2>"$tmp/e5"; rc=$?
-check "resume into a folder whose stats.csv has other columns exits 2 naming it, the file untouched, no reserve left (got $rc)" \
-  '[ $rc -eq 2 ] && grep -q "c5/stats.csv: its columns differ" "$tmp/e5" && cmp -s "$tmp/c5/stats.csv" "$tmp/c5.before" && [ ! -e "$tmp/c5/.sph-reserve" ]'
+check "resume into a folder whose stats.csv has other columns exits 2 naming it, the folder's files untouched, no reserve left (got $rc)" \
+  '[ $rc -eq 2 ] && grep -q "c5/stats.csv: its columns differ" "$tmp/e5" && cmp -s "$tmp/c5/stats.csv" "$tmp/c5.before" && [ ! -e "$tmp/c5/.sph-reserve" ] && grep -q "another run" "$tmp/c5/scene_as_run.json"'
 # A stats.csv shorter than the checkpoint's (another run's folder): refused, and the 5 MiB reserve
 # the run made before reading it removed (until 2026-12-07 it was left in the folder).
 cp -r "$tmp/a" "$tmp/c6"; head -n 3 "$tmp/a/stats.csv" > "$tmp/c6/stats.csv"

@@ -270,23 +270,21 @@ bool restore_ring(StateRing& ring, const World& w, const Checkpoint& ck) {
 /// Doubles are written as their exact bit patterns (JSON numbers would round-trip too, but
 /// infinities would not).
 nlohmann::json step_section(const World& w) {
-    const auto bits = bits_of;
     nlohmann::json j;
     j["clock"] = {{"t_ticks", w.clock.t_ticks}, {"step", w.clock.step}, {"rollbacks", w.clock.rollbacks},
                   {"rows_since_sort", w.clock.rows_since_sort}};
-    j["step_size"] = {{"dt_ticks", w.step_size.dt_ticks}, {"dt", bits(w.step_size.dt)},
-                      {"dt_stable", bits(w.step_size.dt_stable)}};
-    j["stats"] = {{"rho_err_avg", bits(w.stats.rho_err_avg)}, {"rho_err_max", bits(w.stats.rho_err_max)},
-                  {"v_max", bits(w.stats.v_max)}, {"a_max", bits(w.stats.a_max)},
+    j["step_size"] = {{"dt_ticks", w.step_size.dt_ticks}, {"dt", bits_of(w.step_size.dt)},
+                      {"dt_stable", bits_of(w.step_size.dt_stable)}};
+    j["stats"] = {{"rho_err_avg", bits_of(w.stats.rho_err_avg)}, {"rho_err_max", bits_of(w.stats.rho_err_max)},
+                  {"v_max", bits_of(w.stats.v_max)}, {"a_max", bits_of(w.stats.a_max)},
                   {"a_max_particle", w.stats.a_max_particle}};
-    j["rollback"] = {{"resume_dt", bits(w.rollback.resume_dt)}};
+    j["rollback"] = {{"resume_dt", bits_of(w.rollback.resume_dt)}};
     j["counters"] = nlohmann::json::object();
     for (const auto& [name, v] : w.counters) j["counters"][name] = v;
     return j;
 }
 
 void restore_step(World& w, const std::string& text, const std::filesystem::path& file) {
-    const auto real = real_of;
     try {
         const nlohmann::json j = nlohmann::json::parse(text);
         const auto& c = j.at("clock");
@@ -298,15 +296,15 @@ void restore_step(World& w, const std::string& text, const std::filesystem::path
         w.clock.t_stop = std::numeric_limits<double>::infinity();
         const auto& d = j.at("step_size");
         w.step_size.dt_ticks = d.at("dt_ticks").get<Tick>();
-        w.step_size.dt = real(d.at("dt").get<std::uint64_t>());
-        w.step_size.dt_stable = real(d.at("dt_stable").get<std::uint64_t>());
+        w.step_size.dt = real_of(d.at("dt").get<std::uint64_t>());
+        w.step_size.dt_stable = real_of(d.at("dt_stable").get<std::uint64_t>());
         const auto& st = j.at("stats");
-        w.stats.rho_err_avg = real(st.at("rho_err_avg").get<std::uint64_t>());
-        w.stats.rho_err_max = real(st.at("rho_err_max").get<std::uint64_t>());
-        w.stats.v_max = real(st.at("v_max").get<std::uint64_t>());
-        w.stats.a_max = real(st.at("a_max").get<std::uint64_t>());
+        w.stats.rho_err_avg = real_of(st.at("rho_err_avg").get<std::uint64_t>());
+        w.stats.rho_err_max = real_of(st.at("rho_err_max").get<std::uint64_t>());
+        w.stats.v_max = real_of(st.at("v_max").get<std::uint64_t>());
+        w.stats.a_max = real_of(st.at("a_max").get<std::uint64_t>());
         w.stats.a_max_particle = st.at("a_max_particle").get<Index>();
-        w.rollback.resume_dt = real(j.at("rollback").at("resume_dt").get<std::uint64_t>());
+        w.rollback.resume_dt = real_of(j.at("rollback").at("resume_dt").get<std::uint64_t>());
         for (const auto& [name, v] : j.at("counters").items()) {
             if (!w.counters.count(name))
                 throw CheckpointError(file.string() + ": section 'step' has counter '" + name +

@@ -171,21 +171,16 @@ Recorder::Recorder(std::filesystem::path dir, const Simulation& sim, Open)
     check_surface_formats(sim.world());
     std::filesystem::create_directories(m_dir);
     reserve_space();
-    try {  // a constructor that throws runs no destructor: the reserve is removed here
-        write_scene(m_dir, sim.world().scene);
-    } catch (...) {
-        release_reserve();
-        throw;
-    }
     m_t0 = std::chrono::steady_clock::now();
 }
 
+// Both public constructors delegate: the object exists once Recorder(dir, sim, Open) returns, so
+// a throw from their bodies runs ~Recorder, which removes the reserve.
 Recorder::Recorder(std::filesystem::path dir, const Simulation& sim) : Recorder(std::move(dir), sim, Open{}) {
+    write_scene(m_dir, sim.world().scene);
     m_pending = header(sim);
 }
 
-// Delegated: the object exists once Recorder(dir, sim, Open) returns, so a throw from here on
-// runs ~Recorder, which removes the reserve.
 Recorder::Recorder(std::filesystem::path dir, const Simulation& sim, const nlohmann::json& st)
     : Recorder(std::move(dir), sim, Open{}) {
     m_frame = st.at("frame").get<std::size_t>();
@@ -238,12 +233,15 @@ Recorder::Recorder(std::filesystem::path dir, const Simulation& sim, const nlohm
             throw InputError(csv.string() + ": its columns differ from this run's (written by another engine version "
                              "or recipe?); expected the header\n  " + header(sim) + "resume into another --out");
         m_stats_bytes = bytes;
-        if (have > bytes) {
-            // Rows written after the checkpoint will be written again: keep only the prefix.
-            AtomicFile f(csv);
-            f.copy_prefix(csv, bytes);
-            f.commit();
-        }
+    }
+    // The folder is this run's: only now is anything in it replaced (a refused resume leaves
+    // another run's scene_as_run.json and stats.csv as they were).
+    write_scene(m_dir, sim.world().scene);
+    if (!ec && have > bytes) {
+        // Rows written after the checkpoint will be written again: keep only the prefix.
+        AtomicFile f(csv);
+        f.copy_prefix(csv, bytes);
+        f.commit();
     }
     m_t0 = std::chrono::steady_clock::now();
 }
