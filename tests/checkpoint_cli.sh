@@ -144,16 +144,22 @@ check "--resume with a scene exits 2 (got $rc)" '[ $rc -eq 2 ] && grep -q "expec
 # appended, the file left as it was.
 # (Its scene_as_run.json, marked here as another run's, is left as it was too.)
 cp -r "$tmp/a" "$tmp/c5"; sed -i '1s/,v_mean,/,v_avg,/' "$tmp/c5/stats.csv"; cp "$tmp/c5/stats.csv" "$tmp/c5.before"
-echo '{"name": "another run"}' > "$tmp/c5/scene_as_run.json"
+echo '{"name": "another run"}' > "$tmp/c5/scene_as_run.json"; cp "$tmp/c5/run.json" "$tmp/c5.run.json"
 "$run" --resume "$tmp/c5/checkpoints/$first" --out "$tmp/c5" -q 2>"$tmp/e5"; rc=$?
 check "resume into a folder whose stats.csv has other columns exits 2 naming it, the folder's files untouched, no reserve left (got $rc)" \
-  '[ $rc -eq 2 ] && grep -q "c5/stats.csv: its columns differ" "$tmp/e5" && cmp -s "$tmp/c5/stats.csv" "$tmp/c5.before" && [ ! -e "$tmp/c5/.sph-reserve" ] && grep -q "another run" "$tmp/c5/scene_as_run.json"'
+  '[ $rc -eq 2 ] && grep -q "c5/stats.csv: its columns differ" "$tmp/e5" && cmp -s "$tmp/c5/stats.csv" "$tmp/c5.before" && [ ! -e "$tmp/c5/.sph-reserve" ] && grep -q "another run" "$tmp/c5/scene_as_run.json" && cmp -s "$tmp/c5/run.json" "$tmp/c5.run.json"'
 # A stats.csv shorter than the checkpoint's (another run's folder): refused, and the 5 MiB reserve
 # the run made before reading it removed (until 2026-12-07 it was left in the folder).
 cp -r "$tmp/a" "$tmp/c6"; head -n 3 "$tmp/a/stats.csv" > "$tmp/c6/stats.csv"
 "$run" --resume "$tmp/c6/checkpoints/$first" --out "$tmp/c6" -q 2>"$tmp/e6"; rc=$?
 check "resume into a folder whose stats.csv is shorter than the checkpoint's exits 2 naming it, no reserve left (got $rc)" \
   '[ $rc -eq 2 ] && grep -q "c6/stats.csv: holds .* bytes, expected at least the" "$tmp/e6" && [ ! -e "$tmp/c6/.sph-reserve" ]'
+# Outputs no run.json claims (another program's, or a run whose marker was deleted): a resume
+# would append to them and list their frames; refused unless --force, nothing changed.
+cp -r "$tmp/a" "$tmp/c7"; rm "$tmp/c7/run.json"; cp "$tmp/c7/stats.csv" "$tmp/c7.before"
+"$run" --resume "$tmp/c7/checkpoints/$first" --out "$tmp/c7" -q 2>"$tmp/e7"; rc=$?
+check "resume into a folder of unclaimed outputs exits 2 naming them, nothing changed (got $rc)" \
+  '[ $rc -eq 2 ] && grep -q "c7: holds outputs (.*stats.csv.*) that no sph-run run claims (no run.json), the checkpoint belongs to run" "$tmp/e7" && cmp -s "$tmp/c7/stats.csv" "$tmp/c7.before" && [ ! -e "$tmp/c7/run.json" ] && [ ! -e "$tmp/c7/.sph-reserve" ]'
 
 [ $fail -eq 0 ] && echo "checkpoints, resume, SIGKILL and determinism: all checks passed"
 exit $fail

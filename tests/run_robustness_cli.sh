@@ -83,7 +83,7 @@ check "a 252-character probe name: exit 2 naming the key (got $rc)" '[ $rc -eq 2
 #    the whole simulation. Now: what was computed is saved into the 5 MiB reserve the run made at
 #    its start: stats.csv to the failing step, summary.json marked output_failed, the probes.
 mkdir full && if mount -t tmpfs -o size=5400k tmpfs full 2>/dev/null; then
-  trap 'umount "$tmp/full" 2>/dev/null; chmod -R u+w "$tmp" 2>/dev/null; rm -rf "$tmp"' EXIT
+  trap 'umount "$tmp/prev/frames" "$tmp/full" 2>/dev/null; chmod -R u+w "$tmp" 2>/dev/null; rm -rf "$tmp"' EXIT
   "$run" "$scene" --scale 0.05 --end 25 --no-frames -q --out full/run 2>e_full; rc=$?
   check "disk full: exit 5 naming the file and the reason (got $rc)" '[ $rc -eq 5 ] && grep -q "full/run/stats.csv: .*(No space left on device)" e_full'
   check "disk full: the message lists what was saved" 'grep -q "saved before stopping: stats.csv: complete to t = " e_full && grep -q "saved before stopping: summary.json: written" e_full'
@@ -92,6 +92,15 @@ mkdir full && if mount -t tmpfs -o size=5400k tmpfs full 2>/dev/null; then
   check "disk full: stats.csv holds every one of its $steps steps, whole rows" '[ $(( $(wc -l < full/run/stats.csv) - 1 )) -eq "$steps" ] && [ "$(tail -c 1 full/run/stats.csv | od -An -c | tr -d " ")" = "\n" ] && [ "$steps" -gt 15000 ]'
   check "disk full: probes saved, no reserve or temporary file left" '[ -s full/run/probes/front.csv ] && [ ! -e full/run/.sph-reserve ] && [ -z "$(find full -name ".sph.tmp*")" ]'
   rm -rf full/run
+  # The simulation fails (a NaN injected at step 400) on a disk with room for the reserve and
+  # 80 KiB more: the failed run's records do not fit, so they go into the reserve as above,
+  # marked failed and output_failed. (Until 2026-12-07 that path skipped the reserve: exit 3 and
+  # no stats.csv, summary.json or probes.)
+  head -c 200K /dev/zero > full/filler
+  "$run" "$scene" --scale 0.5 --end 0.5 --no-frames -q --inject-nan 400:5 --out full/nan 2>e_fullnan; rc=$?
+  check "disk full when a run fails: exit 3, its records saved from the reserve (got $rc)" \
+    '[ $rc -eq 3 ] && grep -q "saved before stopping: summary.json: written" e_fullnan && [ "$(json full/nan/summary.json "s[\"failed\"][\"step\"]")" = 400 ] && [ -n "$(json full/nan/summary.json "s[\"output_failed\"][\"reason\"]")" ] && [ $(( $(wc -l < full/nan/stats.csv) - 1 )) -ge 400 ] && [ -s full/nan/probes/front.csv ] && [ ! -e full/nan/.sph-reserve ]'
+  rm -rf full/nan full/filler
   # Not even room for the reserve: refused before the simulation starts, the folder left clean.
   head -c 1M /dev/zero > full/filler
   "$run" "$scene" --end 0.01 -q --out full/run2 2>e_noroom; rc=$?
@@ -105,6 +114,21 @@ mkdir full && if mount -t tmpfs -o size=5400k tmpfs full 2>/dev/null; then
 else
   echo "FAIL: cannot mount a tmpfs (the disk-full checks need root)"; fail=1
 fi
+
+# 4c. Replacing an earlier run's outputs is all or nothing: with its frames/ a read-only mount (it
+# cannot be moved or emptied), a fresh run into the folder exits 5 naming it and every output of
+# the earlier run is still there (until 2026-12-07 the files before frames/ in the list were gone).
+"$run" "$scene" --scale 0.5 --end 0.01 -q --out prev 2>/dev/null
+ls -A prev | sort > prev.before
+if mount --bind prev/frames prev/frames 2>/dev/null && mount -o remount,ro,bind prev/frames 2>/dev/null; then
+  "$run" "$scene" --scale 0.5 --end 0.01 -q --set fluid.viscosity=0.2 --out prev 2>e_prev; rc=$?
+  check "an earlier run's outputs that cannot all be removed: exit 5 naming frames/, none removed (got $rc)" \
+    '[ $rc -eq 5 ] && grep -q "prev/frames: cannot remove the earlier run.s output" e_prev && [ "$(ls -A prev | sort)" = "$(cat prev.before)" ] && [ -s prev/stats.csv ] && [ -s prev/summary.json ]'
+  umount prev/frames
+else
+  echo "FAIL: cannot make a read-only bind mount (the all-or-nothing check needs root, as CI runs)"; fail=1
+fi
+rm -rf prev
 
 # 5. Inputs that never end or are too deep: refused at once.
 mkfifo fifo

@@ -205,6 +205,15 @@ int main(int argc, char** argv) {
     std::unique_ptr<sph::Recorder> recorder;
     std::optional<std::chrono::steady_clock::time_point> run_started;  // for the summary of a salvaged run
     int run_threads = threads;  // the run's thread count once known (summaries of failed runs)
+    const auto wall_so_far = [&] {
+        return run_started ? std::chrono::duration<double>(std::chrono::steady_clock::now() - *run_started).count() : 0.0;
+    };
+    // What was computed is saved into the room the recorder kept in reserve (Recorder::salvage).
+    const auto salvage = [&](const std::string& reason) {
+        if (!recorder || !sim) return;
+        for (const auto& line : recorder->salvage(*sim, reason, wall_so_far(), run_threads))
+            std::fprintf(stderr, "sph-run: saved before stopping: %s\n", line.c_str());
+    };
     try {
         std::vector<std::pair<std::string, nlohmann::json>> overrides;
         for (const auto& s : sets) overrides.push_back(sph::parse_override(s));
@@ -312,6 +321,16 @@ int main(int argc, char** argv) {
         if (!graph_file.empty()) {
             sph::write_file_atomic(graph_file, sim->graph().dot());
             spdlog::info("system graph written to {}", graph_file);
+        }
+        // A resume into a folder whose stats.csv is another run's is refused before the folder is
+        // taken, so that nothing in it changes.
+        if (checkpoint) {
+            try {
+                sph::Recorder::check_resume(out, *sim, checkpoint->meta.at("recorder"));
+            } catch (const nlohmann::json::exception& e) {
+                throw sph::CheckpointError(resume_file + ": meta key 'recorder' is not what sph-run writes (" +
+                                           e.what() + ")");
+            }
         }
         // Set-up succeeded: only now are an earlier run's outputs replaced (a run that fails
         // before this point leaves them as they were).
@@ -435,31 +454,24 @@ int main(int argc, char** argv) {
     } catch (const sph::SimulationError& e) {
         std::fprintf(stderr, "\nsph-run: simulation failed: %s\n", e.what());
         if (recorder && sim) {
+            recorder->set_failed(e.what());
             try {
-                const double wall = run_started ? std::chrono::duration<double>(std::chrono::steady_clock::now() -
-                                                                                *run_started).count()
-                                                : 0.0;
-                recorder->set_failed(e.what());
-                recorder->finish(*sim, wall, run_threads);
+                recorder->finish(*sim, wall_so_far(), run_threads);
                 std::fprintf(stderr, "sph-run: stats.csv, probes and summary.json (marked \"failed\") cover the run "
                                      "to its last good step\n");
-            } catch (...) {
+            } catch (const std::exception& w) {  // no room left (or a folder gone): the reserve's turn
+                std::fprintf(stderr, "sph-run: cannot write an output: %s\n", w.what());
+                salvage(w.what());
             }
         }
         return 3;
     } catch (const sph::OutputError& e) {
         std::fprintf(stderr, "\nsph-run: cannot write an output: %s\n", e.what());
-        // What was computed is saved into the room the recorder kept in reserve.
-        if (recorder && sim) {
-            const double wall = run_started ? std::chrono::duration<double>(std::chrono::steady_clock::now() -
-                                                                            *run_started).count()
-                                            : 0.0;
-            for (const auto& line : recorder->salvage(*sim, e.what(), wall, run_threads))
-                std::fprintf(stderr, "sph-run: saved before stopping: %s\n", line.c_str());
-        }
+        salvage(e.what());
         return 5;
-    } catch (const std::filesystem::filesystem_error& e) {
+    } catch (const std::filesystem::filesystem_error& e) {  // e.g. out of inodes creating a folder
         std::fprintf(stderr, "\nsph-run: cannot write an output: %s\n", e.what());
+        salvage(e.what());
         return 5;
     } catch (const std::exception& e) {
         std::fprintf(stderr, "sph-run: internal error: %s\n", e.what());

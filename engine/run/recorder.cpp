@@ -154,7 +154,7 @@ std::vector<std::string> extra_counters(const World& w) {
     return out;
 }
 
-std::string Recorder::header(const Simulation& sim) const {
+std::string Recorder::header(const Simulation& sim) {
     std::ostringstream h;
     h << "step,t,dt,updated,neighbours_per_particle,rho_err_avg,rho_err_max,v_max,a_max,collisions,"
          "active,active_fraction,neighbour_searches,force_evaluations,boundary_contributions,"
@@ -171,7 +171,33 @@ Recorder::Recorder(std::filesystem::path dir, const Simulation& sim, Open)
     check_surface_formats(sim.world());
     std::filesystem::create_directories(m_dir);
     reserve_space();
+    // The probes' folder now, not at the first write: on a file system out of inodes the run
+    // stops here, before its first step, rather than after it (the reserve holds bytes, not inodes).
+    try {  // this constructor's own throw runs no destructor: the reserve is removed here
+        if (!sim.world().scene.probes.empty()) std::filesystem::create_directories(m_dir / "probes");
+    } catch (...) {
+        release_reserve();
+        throw;
+    }
     m_t0 = std::chrono::steady_clock::now();
+}
+
+void Recorder::check_resume(const std::filesystem::path& dir, const Simulation& sim, const nlohmann::json& st) {
+    const std::uint64_t bytes = st.at("stats_bytes").get<std::uint64_t>();
+    const auto csv = dir / "stats.csv";
+    std::error_code ec;
+    const auto have = std::filesystem::file_size(csv, ec);
+    if (ec) return;
+    if (have < bytes)
+        throw InputError(csv.string() + ": holds " + std::to_string(have) + " bytes, expected at least the " +
+                         std::to_string(bytes) + " written before the checkpoint (resume into another --out)");
+    // Rows appended under another header would be misread by every tool (an older engine wrote
+    // the file, or another recipe with other systems).
+    std::string first;
+    std::getline(std::ifstream(csv), first);
+    if (first + '\n' != header(sim))
+        throw InputError(csv.string() + ": its columns differ from this run's (written by another engine version "
+                         "or recipe?); expected the header\n  " + header(sim) + "resume into another --out");
 }
 
 // Both public constructors delegate: the object exists once Recorder(dir, sim, Open) returns, so
@@ -213,6 +239,7 @@ Recorder::Recorder(std::filesystem::path dir, const Simulation& sim, const nlohm
     // at the resume time).
     if (const auto it = st.find("probes"); it != st.end()) m_probes.restore(*it);
     const std::uint64_t bytes = st.at("stats_bytes").get<std::uint64_t>();
+    check_resume(m_dir, sim, st);
     const auto csv = m_dir / "stats.csv";
     std::error_code ec;
     const auto have = std::filesystem::file_size(csv, ec);
@@ -221,21 +248,11 @@ Recorder::Recorder(std::filesystem::path dir, const Simulation& sim, const nlohm
         // collections list only those this folder holds).
         m_pending = header(sim);
         m_first_frame = m_frame;
-    } else if (have < bytes) {
-        throw InputError(csv.string() + ": holds " + std::to_string(have) + " bytes, expected at least the " +
-                         std::to_string(bytes) + " written before the checkpoint (resume into another --out)");
     } else {
-        // Rows appended under another header would be misread by every tool (an older engine
-        // wrote the file, or another recipe with other systems).
-        std::string first;
-        std::getline(std::ifstream(csv), first);
-        if (first + '\n' != header(sim))
-            throw InputError(csv.string() + ": its columns differ from this run's (written by another engine version "
-                             "or recipe?); expected the header\n  " + header(sim) + "resume into another --out");
         m_stats_bytes = bytes;
     }
-    // The folder is this run's: only now is anything in it replaced (a refused resume leaves
-    // another run's scene_as_run.json and stats.csv as they were).
+    // The folder is this run's (check_resume above; sph-run calls it before it takes the folder,
+    // so a refused resume leaves another run's folder as it was): only now is anything replaced.
     write_scene(m_dir, sim.world().scene);
     if (!ec && have > bytes) {
         // Rows written after the checkpoint will be written again: keep only the prefix.

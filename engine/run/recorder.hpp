@@ -34,8 +34,13 @@ public:
     /// @brief Continues a run from a checkpoint: `state` is what state() returned then; the
     /// first stats_bytes bytes of dir/stats.csv are kept (a fresh stats.csv is started at the
     /// checkpoint's step when the directory has none).
-    /// A bad state or a stats.csv that does not fit it throws InputError, the reserve removed.
+    /// check_resume's refusals throw as there, the reserve removed; a state without the keys
+    /// state() writes throws nlohmann::json::exception (sph-run names the checkpoint).
     Recorder(std::filesystem::path dir, const Simulation& sim, const nlohmann::json& state);
+    /// @brief Whether a run resumed from `state` may continue in `dir`, reading only: throws
+    /// InputError naming dir/stats.csv when it holds fewer bytes than were written before the
+    /// checkpoint or another header (another run's folder). A folder without stats.csv passes.
+    static void check_resume(const std::filesystem::path& dir, const Simulation& sim, const nlohmann::json& state);
     ~Recorder();  ///< removes the reserve whatever ended the run
     Recorder(const Recorder&) = delete;
     Recorder& operator=(const Recorder&) = delete;
@@ -72,7 +77,7 @@ public:
 
 private:
     struct Open {};
-    /// What both constructors do first: the folder, its reserve and scene_as_run.json.
+    /// What both constructors do first: the folder, its reserve and (with probes) probes/.
     Recorder(std::filesystem::path dir, const Simulation& sim, Open);
     /// after_step's particle reads, one predicate each (reads_particles is their union).
     bool front_due(const World& w) const;
@@ -89,7 +94,7 @@ private:
     std::uint64_t m_surface_frames = 0;  ///< surfaces built (this process)
     /// frames.pvd (and boundary_moving.pvd): every .vtu frame so far with its simulated time (ParaView).
     void write_collection(const World& w) const;
-    std::string header(const Simulation& sim) const;
+    static std::string header(const Simulation& sim);
 
     std::filesystem::path m_dir;
     ProbeSet m_probes;  ///< the scene's probes, written to probes/<name>.csv with stats.csv

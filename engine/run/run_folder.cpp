@@ -11,6 +11,7 @@
 #include <fstream>
 #include <random>
 #include <sstream>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -25,6 +26,7 @@ namespace fs = std::filesystem;
 
 constexpr const char* kMarker = "run.json";
 constexpr const char* kLock = ".sph-run.lock";
+constexpr const char* kReplaced = ".sph-replaced";  ///< an earlier run's outputs on their way out
 /// What sph-run writes into its folder (and so may remove again).
 constexpr const char* kOutputs[] = {"scene_as_run.json", "stats.csv", "summary.json", "frames", "frames.pvd", "boundary",
                                     "boundary_moving.pvd", "probes", "checkpoints", "surface", ".sph-reserve"};
@@ -38,13 +40,33 @@ std::string list_outputs(const fs::path& dir) {
     return found;
 }
 
+/// Removes the outputs all or nothing: each is first renamed into the hidden folder kReplaced (a
+/// rename happens whole or not at all); when one cannot be (a folder without write permission, a
+/// mount point), those already moved are put back and OutputError names it, the earlier run's
+/// outputs left as they were. Only then is the hidden folder deleted; what cannot be deleted stays
+/// hidden there, out of the new run's way, and the next replacement tries again.
 void remove_outputs(const fs::path& dir, bool keep_checkpoints) {
+    const fs::path trash = dir / kReplaced;
+    std::error_code ec;
+    fs::remove_all(trash, ec);
+    ec.clear();
+    fs::create_directory(trash, ec);
+    if (ec) throw OutputError(trash.string() + ": cannot create it to replace the earlier run's outputs (" + ec.message() + ")");
+    std::vector<const char*> moved;
     for (const char* o : kOutputs) {
         if (keep_checkpoints && std::strcmp(o, "checkpoints") == 0) continue;
-        std::error_code ec;
-        fs::remove_all(dir / o, ec);
-        if (ec) throw OutputError((dir / o).string() + ": cannot remove the earlier run's output (" + ec.message() + ")");
+        if (!fs::exists(fs::symlink_status(dir / o, ec))) continue;
+        fs::rename(dir / o, trash / o, ec);
+        if (ec) {
+            const std::string why = ec.message();
+            for (auto it = moved.rbegin(); it != moved.rend(); ++it) fs::rename(trash / *it, dir / *it, ec);
+            fs::remove(trash, ec);
+            throw OutputError((dir / o).string() + ": cannot remove the earlier run's output (" + why +
+                              "); none of its outputs was removed");
+        }
+        moved.push_back(o);
     }
+    fs::remove_all(trash, ec);
 }
 
 nlohmann::json read_marker(const fs::path& dir) {
@@ -129,6 +151,16 @@ RunFolder::RunFolder(fs::path dir, std::string run_id, std::string scene, bool r
                 m_note = "replaced the outputs (" + outputs + ") of " +
                          (marker.is_null() ? std::string("an unmarked run") : describe(marker)) + " in " + m_dir.string();
             }
+        } else if (marker.is_null() && !outputs.empty()) {
+            // Outputs no run claims: continuing the checkpoint's run here would append to (and
+            // list in frames.pvd) another run's files.
+            if (!force)
+                throw InputError(m_dir.string() + ": holds outputs (" + outputs +
+                                 ") that no sph-run run claims (no run.json), the checkpoint belongs to run " +
+                                 (m_run_id.empty() ? std::string("(unnamed)") : m_run_id) +
+                                 "; resume into the run's own folder or an empty --out, or pass --force to replace them");
+            m_replace = Replace::AllButCheckpoints;
+            m_note = "replaced the outputs (" + outputs + ") of an unmarked run in " + m_dir.string();
         } else if (!marker.is_null() && marker["run_id"].get<std::string>() != m_run_id && !m_run_id.empty()) {
             if (!force)
                 throw InputError(m_dir.string() + ": holds the outputs of " + describe(marker) +

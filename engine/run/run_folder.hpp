@@ -8,9 +8,10 @@
 /// A fresh run into a folder that holds the outputs of an earlier marked run removes them
 /// (stats.csv, summary.json, frames/, boundary/, the .pvd files, probes/, checkpoints/) when it
 /// takes the folder, after its set-up succeeded (take()): a run whose set-up fails leaves the
-/// earlier outputs as they were. Outputs without a marker
-/// (another program's, or an older sph-run's) are replaced only with `force`. A resumed run
-/// must find its own run's marker (or none).
+/// earlier outputs as they were; the removal is all or nothing (an output that cannot be removed
+/// leaves every one in place). Outputs without a marker (another program's, or an older
+/// sph-run's) are replaced only with `force`. A resumed run must find its own run's marker, or
+/// a folder without outputs (or `force`).
 #include <filesystem>
 #include <string>
 
