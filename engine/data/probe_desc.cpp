@@ -32,13 +32,33 @@ const char* to_string(ProbeType t) {
 }
 
 const char* to_string(PressureSource s) {
-    return s == PressureSource::Fluid ? "fluid" : s == PressureSource::Boundary ? "boundary" : "sensor";
+    switch (s) {
+        case PressureSource::Fluid:
+            return "fluid";
+        case PressureSource::Boundary:
+            return "boundary";
+        case PressureSource::Sensor:
+            return "sensor";
+    }
+    return "unknown";
 }
 const char* to_string(FrontMethod m) {
-    return m == FrontMethod::Neighbours ? "neighbours" : "colour";
+    switch (m) {
+        case FrontMethod::Neighbours:
+            return "neighbours";
+        case FrontMethod::Colour:
+            return "colour";
+    }
+    return "unknown";
 }
 const char* to_string(HeightMethod m) {
-    return m == HeightMethod::Column ? "column" : "highest";
+    switch (m) {
+        case HeightMethod::Column:
+            return "column";
+        case HeightMethod::Highest:
+            return "highest";
+    }
+    return "unknown";
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -137,11 +157,12 @@ public:
 
     ProbeDesc probe(const json& p, const std::string& path, std::size_t index) const {
         if (!p.is_object()) fail(path, p, "an object with a type (a probe)");
-        const std::string type =
-            word(p, path, "type", {"pressure", "height", "front", "fluid"}, nullptr);
+        const std::string type = word(p, path, "type", {to_string(ProbeType::Pressure), to_string(ProbeType::Height),
+                                                        to_string(ProbeType::Front), to_string(ProbeType::Fluid)},
+                                      nullptr);
         ProbeDesc d;
         const std::string ctx = " for a " + json(type).dump() + " probe";
-        if (type == "pressure") {
+        if (type == to_string(ProbeType::Pressure)) {
             d.type = ProbeType::Pressure;
             keys(p, path, {"type", "name", "rate", "experiment", "point", "source", "radius", "diameter", "normal"}, ctx);
             d.point = vec3(p, path, "point", std::nullopt);
@@ -162,7 +183,7 @@ public:
                 if (!(d.normal.norm() > 0)) fail(path + "/normal", p["normal"], "a non-zero vector (the wall's normal at the sensor)");
                 d.normal = unit(d.normal);
             }
-        } else if (type == "height") {
+        } else if (type == to_string(ProbeType::Height)) {
             d.type = ProbeType::Height;
             keys(p, path, {"type", "name", "rate", "experiment", "from", "to", "method"}, ctx);
             const char* column = to_string(HeightMethod::Column);
@@ -172,7 +193,7 @@ public:
             d.from = vec3(p, path, "from", std::nullopt);
             d.to = vec3(p, path, "to", std::nullopt);
             if ((d.to - d.from).norm() <= 0) fail(path + "/to", p["to"], "a point different from \"from\"");
-        } else if (type == "front") {
+        } else if (type == to_string(ProbeType::Front)) {
             d.type = ProbeType::Front;
             const char* neighbours = to_string(FrontMethod::Neighbours);
             d.method = word(p, path, "method", {neighbours, to_string(FrontMethod::Colour)}, neighbours) == neighbours

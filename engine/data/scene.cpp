@@ -178,6 +178,8 @@ BoundaryDesc translated(const BoundaryDesc& b, const Vec3d& d) {
     out.box.max += d;
     out.center += d;
     for (auto& v : out.vertices) v += d;
+    for (auto& row : out.heights)  // a height field's surface is its heights: they move with it
+        for (double& y : row) y += d.y();
     return out;
 }
 

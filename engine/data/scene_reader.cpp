@@ -67,13 +67,10 @@ void heightfield_triangles(const Aabb& span, BoundaryDesc& b) {
             b.triangles.push_back({id(i + 1, k), id(i, k + 1), id(i + 1, k + 1)});
         }
     // The declared span in x and z (the last vertex may round an ulp off it), the heights' range in y.
+    const Aabb heights = vertices_box(b.vertices);
     b.box = span;
-    b.box.min.y() = std::numeric_limits<double>::max();
-    b.box.max.y() = std::numeric_limits<double>::lowest();
-    for (const auto& v : b.vertices) {
-        b.box.min.y() = std::min(b.box.min.y(), v.y());
-        b.box.max.y() = std::max(b.box.max.y(), v.y());
-    }
+    b.box.min.y() = heights.min.y();
+    b.box.max.y() = heights.max.y();
 }
 
 // ---- Validation: document -> Scene. ----

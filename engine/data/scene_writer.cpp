@@ -104,12 +104,11 @@ json probe_json(const ProbeDesc& d) {
             j["method"] = to_string(d.height_method);
             break;
         case ProbeType::Front:
+            j["method"] = to_string(d.method);
             if (d.method == FrontMethod::Neighbours) {
-                j["method"] = to_string(d.method);
                 j["direction"] = vec(d.direction);
                 j["min_neighbours"] = d.min_neighbours;
             } else {
-                j["method"] = to_string(d.method);
                 j["from"] = vec(d.from);
                 j["to"] = vec(d.to);
             }
@@ -299,6 +298,38 @@ void check_derived(const std::string& label, std::size_t k, const BoundaryDesc& 
                    "sph::reference_point of the boundary gives it)");
 }
 
+/// The JSON pointer of the first value where `a` (the scene as built) and `b` (as the loader
+/// read it) differ, numbers compared by near(); "" when none. The loader changes what it reads
+/// only by normalising (a direction or axis made a unit vector), so a difference is a value set
+/// in code that a scene file could not hold.
+std::string first_difference(const json& a, const json& b, const std::string& at) {
+    if (a.is_number() && b.is_number()) return near(a.get<double>(), b.get<double>()) ? "" : at;
+    if (a.type() != b.type()) return at;
+    if (a.is_object()) {
+        for (auto it = a.begin(); it != a.end(); ++it) {
+            const std::string path = at + "/" + it.key();
+            if (!b.contains(it.key())) return path;
+            if (std::string d = first_difference(it.value(), b.at(it.key()), path); !d.empty()) return d;
+        }
+        for (auto it = b.begin(); it != b.end(); ++it)
+            if (!a.contains(it.key())) return at + "/" + it.key();
+        return "";
+    }
+    if (a.is_array()) {
+        if (a.size() != b.size()) return at;
+        const auto numbers = [](const json& v) { return std::all_of(v.begin(), v.end(), [](const json& x) { return x.is_number(); }); };
+        if (numbers(a) && numbers(b)) {  // a vector is named whole
+            for (std::size_t i = 0; i < a.size(); ++i)
+                if (!near(a[i].get<double>(), b[i].get<double>())) return at;
+            return "";
+        }
+        for (std::size_t i = 0; i < a.size(); ++i)
+            if (std::string d = first_difference(a[i], b[i], at + "/" + std::to_string(i)); !d.empty()) return d;
+        return "";
+    }
+    return a == b ? "" : at;
+}
+
 }  // namespace
 
 void validate_scene(const Scene& scene) {
@@ -306,8 +337,27 @@ void validate_scene(const Scene& scene) {
     // and says what it expected, as for a file that held null there.
     const std::string label =
         scene.source.empty() ? "scene \"" + scene.name + "\" (built in code)" : scene.source.string() + " (changed in code)";
-    const Scene back = parse_scene(scene_to_json(scene).dump(), label);
+    const json written = scene_to_json(scene);
+    const Scene back = parse_scene(written.dump(), label);
     for (std::size_t k = 0; k < scene.boundaries.size(); ++k) check_derived(label, k, scene.boundaries[k], back.boundaries[k]);
+    for (std::size_t k = 0; k < scene.probes.size(); ++k) {  // a colour front's direction: from `from` to `to`
+        const ProbeDesc& d = scene.probes[k];
+        if (d.type == ProbeType::Front && d.method == FrontMethod::Colour && !near(d.direction, back.probes[k].direction))
+            throw SceneError(label, "/probes/" + std::to_string(k) + "/direction",
+                             scene_detail::fmt_vec(d.direction) + " on a colour front",
+                             scene_detail::fmt_vec(back.probes[k].direction) +
+                                 ", the unit vector from its `from` to its `to`, which the probe reads along");
+    }
+    // What the loader normalised (a direction, an axis): the scene as read differs from the scene
+    // as written where the code set a value a scene file would not give.
+    const json reread = scene_to_json(back);
+    if (const std::string at = first_difference(written, reread, ""); !at.empty()) {
+        const json::json_pointer ptr(at);
+        const auto shown = [&](const json& j) { return j.contains(ptr) ? j.at(ptr).dump() : std::string("nothing"); };
+        throw SceneError(label, at, shown(written),
+                         shown(reread) + ", the value the loader makes of it (a direction or axis is a unit vector: "
+                                         "sph::unit)");
+    }
 }
 
 }  // namespace sph

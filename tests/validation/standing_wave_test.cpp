@@ -133,8 +133,9 @@ TEST(StandingWave, PeriodAndDecayAgainstLinearTheory) {
     const double decay = 2 * nu * k * k;
     std::printf("linear theory: period %.4f s, decay %.4f 1/s\n", period, decay);
     const Wave corrected = run_wave(0.01, true, 0.0, nu, 3.2 * period, 1.5, {}, PressureGradient::Corrected);
-    // The comparison runs decay 4-30x faster than the laminar rate, so 1.7 periods (three
-    // extrema, 5-60 % of the amplitude lost) measure their rates; 3.2 would add half their cost.
+    // The comparison runs decay 4-10x faster than the laminar rate, losing 29-55 % of their
+    // amplitude over 1.7 periods (three extrema), enough to fit their rates; 3.2 periods would
+    // add half their cost.
     const Wave w = run_wave(0.01, true, 0.0, nu, 1.7 * period, 1.5);
     const Wave mirrored = run_wave(0.01, true, 0.0, nu, 1.7 * period, 1.5, WallPressure::Mirrored);
     const Wave old = run_wave(0.01, false, 0.1, 0.0, 1.7 * period, 1.5);

@@ -237,6 +237,7 @@ TEST(SceneWriter, ValidateRefusesDerivedValuesThatDisagreeWithTheRest) {
     EXPECT_EQ(hf.box.min, Vec3d(0.2, 0.05, 0.2));
     EXPECT_EQ(hf.box.max, Vec3d(0.8, 0.2, 0.8));
     EXPECT_EQ(refusal(with(hf)), "accepted");
+    EXPECT_EQ(refusal(with(translated(hf, Vec3d(0.05, 0.1, -0.05)))), "accepted");  // heights, surface and box move together
     BoundaryDesc stale = hf;
     stale.heights[1][1] = 0.3;  // edited after the surface was built
     EXPECT_EQ(refusal(with(stale)), at + ": found a heightfield with 4 vertices and 2 triangles that are not its heights' "
@@ -268,4 +269,33 @@ TEST(SceneWriter, ValidateRefusesDerivedValuesThatDisagreeWithTheRest) {
     EXPECT_EQ(refusal(with(rod)), at + "/motion: found a circle whose start direction is [0,0,1], expected [1,0,0], the "
                                        "direction of the box's reference point from the circle's centre in its plane "
                                        "(sph::circle_motion with sph::reference_point of the boundary gives it)");
+
+    // Directions and axes the loader makes unit vectors: set by hand at another length, the run
+    // would differ from the same scene read from a file (a motion twice as far, a probe reading
+    // along another line).
+    BoundaryDesc shaken = test::box_obstacle(Aabb{Vec3d(0.45, 0.1, 0.45), Vec3d(0.55, 0.6, 0.55)},
+                                             sinusoidal_motion(Vec3d(1, 0, 0), 0.02, 0.5));
+    shaken.motion->axis = Vec3d(2, 0, 0);
+    EXPECT_EQ(refusal(with(shaken)), at + "/motion/axis: found [2.0,0.0,0.0], expected [1.0,0.0,0.0], the value the loader "
+                                          "makes of it (a direction or axis is a unit vector: sph::unit)");
+    Scene probed = good;
+    ProbeDesc sensor;
+    sensor.name = "wall";
+    sensor.type = ProbeType::Pressure, sensor.source = PressureSource::Sensor;
+    sensor.point = Vec3d(1, 0.05, 0.5), sensor.diameter = 0.02, sensor.normal = Vec3d(-3, 0, 0);
+    probed.probes.push_back(sensor);
+    EXPECT_EQ(refusal(probed), "scene \"test_tank\" (built in code): /probes/0/normal: found [-3.0,0.0,0.0], expected "
+                               "[-1.0,0.0,0.0], the value the loader makes of it (a direction or axis is a unit vector: "
+                               "sph::unit)");
+    probed.probes.back().normal = Vec3d(-1, 0, 0);
+    EXPECT_EQ(refusal(probed), "accepted");
+    ProbeDesc colour;  // along y, its direction left at the default x
+    colour.name = "rise";
+    colour.type = ProbeType::Front, colour.method = FrontMethod::Colour;
+    colour.from = Vec3d(0.5, 0, 0.5), colour.to = Vec3d(0.5, 1, 0.5);
+    probed.probes.push_back(colour);
+    EXPECT_EQ(refusal(probed), "scene \"test_tank\" (built in code): /probes/1/direction: found [1,0,0] on a colour front, "
+                               "expected [0,1,0], the unit vector from its `from` to its `to`, which the probe reads along");
+    probed.probes.back().direction = Vec3d(0, 1, 0);
+    EXPECT_EQ(refusal(probed), "accepted");
 }
