@@ -15,6 +15,15 @@
 #   kill-tool         SIGKILL the tool that started this (a crash of the tool) before running
 #   int-tool          SIGINT the tool that started this (Ctrl-C), then wait (sleep 30) for the
 #                     tool to end this process; its pid goes to $FAKE_PIDFILE if set
+#   int-group         run, then SIGINT the tool's whole process group, as a terminal's Ctrl-C
+#                     does (the tool must lead its group: start it with `setsid --wait`; refused,
+#                     exit 99, otherwise, so that a test runner is never signalled), and then do
+#                     what sph-run does: the first SIGINT or SIGTERM lets the step in progress
+#                     finish (here 2 s, or until a second signal), then summary.json is marked
+#                     "interrupted" by it and the exit is 128 + it; a second signal stops at once
+#                     (no stats.csv, no summary.json). The signals it got, in order, go to
+#                     <out>/fake_signals ("TERM": the tool forwarded one SIGTERM and nothing else
+#                     reached the run; "INT TERM": the terminal's SIGINT reached it too)
 # Calls without --out (--list-modes) and runs no rule matches go to the real sph-run unchanged.
 set -uo pipefail
 set -f  # the rules' globs are patterns, not file names
@@ -47,6 +56,26 @@ case "$action" in
       { head -n 5 "$f"; printf '%s' "${cell:0:$(( (${#cell} + 1) / 2 ))}"; } > "$out/cut.tmp" && mv "$out/cut.tmp" "$f"
     done ;;
   no-probes) rm -rf "$out/probes" ;;
+  int-group)
+    stat=$(cat "/proc/$PPID/stat"); stat=${stat##*) }; read -r _ _ group _ <<< "$stat"
+    if [ "$group" != "$PPID" ]; then
+      echo "fake sph-run: int-group: the tool ($PPID) does not lead its process group ($group): start it with setsid --wait" >&2
+      exit 99
+    fi
+    got=()
+    trap 'got+=(INT)' INT
+    trap 'got+=(TERM)' TERM
+    kill -INT -- "-$group"
+    for _ in $(seq 40); do [ ${#got[@]} -ge 2 ] && break; sleep 0.05; done
+    echo "${got[*]}" > "$out/fake_signals"
+    case ${#got[@]} in
+      0) exit 0 ;;
+      1) /usr/bin/python3 -c 'import json, sys
+s = json.load(open(sys.argv[1])); s["interrupted"] = {"by": "SIG" + sys.argv[2], "t": s["simulated_time_s"], "step": s["steps"]}
+json.dump(s, open(sys.argv[1], "w"), indent=2)' "$out/summary.json" "${got[0]}" || exit 99
+         [ "${got[0]}" = INT ] && exit 130; exit 143 ;;
+      *) rm -f "$out/summary.json" "$out/stats.csv"; [ "${got[1]}" = INT ] && exit 130; exit 143 ;;
+    esac ;;
   interrupted)
     /usr/bin/python3 -c 'import json, sys
 s = json.load(open(sys.argv[1])); s["interrupted"] = {"by": "SIGTERM", "t": s["simulated_time_s"], "step": s["steps"]}

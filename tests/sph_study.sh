@@ -132,6 +132,46 @@ check_refused "out /proc/x: cannot create the output folder" scenes/martin_moyce
 check_refused "truncated.json: not a readable JSON scene" "$out/truncated.json" --out "$out/r"
 echo "sph-study bad arguments: ok"
 
+# The study never writes over its scene: with --out the scene's own folder, its copy (a scene
+# without a fluid probe gets one, study_fluid) is <stem>.study.json, and arguments are checked
+# before anything is written (before: my.json itself was rewritten, even when the study then
+# stopped with "no configurations"). The copy's relative files (an experiment's, a mesh's) point
+# to the original's: absolute, from the scene's folder.
+mkdir -p "$out/home/data"
+cp data/validation/martin_moyce_1952_n2-2_front_table2.csv "$out/home/data/front.csv"
+/usr/bin/python3 - "$out/home/my.json" <<'PY'
+import json, sys
+s = json.load(open("scenes/martin_moyce.json"))
+s["probes"] = [p for p in s["probes"] if p["type"] != "fluid"][:1]
+s["probes"][0]["experiment"]["file"] = "data/front.csv"
+open(sys.argv[1], "w").write(json.dumps(s) + "\n")  # one line: any rewrite shows
+PY
+before=$(md5sum < "$out/home/my.json")
+rc=0; "$tools/sph-study" "$out/home/my.json" --no-default-modes --out "$out/home" > "$out/hlog" 2>&1 || rc=$?
+[ "$rc" -eq 2 ] && grep -q "no configurations" "$out/hlog" && [ "$(md5sum < "$out/home/my.json")" = "$before" ] \
+    && [ "$(ls -A "$out/home" | tr '\n' ' ')" = "data my.json " ] \
+    || { echo "no configurations, --out the scene's folder: exit $rc, expected 2, my.json as it was and nothing written"
+         ls -A "$out/home"; cat "$out/hlog"; exit 1; }
+rc=0; "$tools/sph-study" "$out/home/my.json" --no-default-modes --config global --scale 0.296296 --end 0.002 \
+    --out "$out/home" > "$out/hlog" 2>&1 || rc=$?
+[ "$rc" -eq 0 ] && [ "$(md5sum < "$out/home/my.json")" = "$before" ] \
+    && /usr/bin/python3 -c 'import json, os, sys
+s = json.load(open(sys.argv[1] + "/my.study.json"))
+assert [p["name"] for p in s["probes"]] == ["front", "study_fluid"], s["probes"]
+f = s["probes"][0]["experiment"]["file"]
+assert f.startswith("/") and os.path.samefile(f, sys.argv[1] + "/data/front.csv"), f' "$out/home" \
+    || { echo "a study in the scene's folder: exit $rc, expected 0, my.json as it was, my.study.json with absolute files"
+         cat "$out/hlog"; exit 1; }
+# glass.json's mesh is meshes/glass.obj beside the scene: the copy (glass has no probe) loads.
+rc=0; "$tools/sph-study" scenes/glass.json --no-default-modes --config adaptive --end 0.002 --out "$out/glass" \
+    > "$out/glog2" 2>&1 || rc=$?
+[ "$rc" -eq 0 ] && /usr/bin/python3 -c 'import json, os, sys
+f = json.load(open(sys.argv[1]))["boundaries"][1]["file"]
+assert f.startswith("/") and os.path.samefile(f, "scenes/meshes/glass.obj"), f' "$out/glass/glass.study.json" \
+    && [ "$(cut -d, -f1,4 "$out/glass/study.csv" | tr -d '\r' | tr '\n' ' ')" = "configuration,status adaptive,ok " ] \
+    || { echo "sph-study scenes/glass.json: exit $rc, expected 0, the copy's mesh absolute"; cat "$out/glog2"; exit 1; }
+echo "sph-study leaves the scene alone, its copy's files absolute: ok"
+
 # A run that exits 0 but leaves output that cannot be read (tests/fake_sph_run.sh: a truncated
 # summary.json, no probes/) is a row "unreadable: <file>: <reason>", the other runs' rows and the
 # reference are complete, and the study exits 2 naming the runs, after writing the tables.
@@ -211,6 +251,40 @@ rc=0; FAKE_PIDFILE=$out/i.pid FAKE_RULES='*/02_individual:int-tool' "$tools/sph-
     || { echo "interrupted study: exit $rc, expected 130, its child (pid $(cat "$out/i.pid" 2>/dev/null)) ended, the global row"
          ps -o pid,stat,args -p "$(cat "$out/i.pid" 2>/dev/null || echo 1)"; cat "$out/ilog" "$out/i/study.csv"; exit 1; }
 echo "sph-study Ctrl-C: ok"
+
+# Ctrl-C at a terminal signals the whole foreground process group. The study, leading its own
+# group (setsid), gets that SIGINT during its second run; the fake sph-run sends it and records
+# what reaches it: exactly one signal, the study's SIGTERM (each run in its own session, so the
+# terminal's SIGINT is the study's alone), after which it saves its summary marked "interrupted"
+# by SIGTERM, as sph-run does; the study dies by SIGINT (130), the global row kept.
+rc=0; FAKE_RULES='*/02_individual:int-group' setsid --wait "$tools/sph-study" "${tiny[@]}" --out "$out/g" \
+    > "$out/glog" 2>&1 || rc=$?
+[ "$rc" -eq 130 ] && grep -q "^sph-study: interrupted$" "$out/glog" && ! grep -q Traceback "$out/glog" \
+    && [ "$(cat "$out/g/02_individual/fake_signals")" = "TERM" ] \
+    && grep -q '"by": "SIGTERM"' "$out/g/02_individual/summary.json" \
+    && [ "$(cut -d, -f1,4 "$out/g/study.csv" | tr -d '\r' | tr '\n' ' ')" = "configuration,status global,ok " ] \
+    || { echo "Ctrl-C to the study's process group: exit $rc, expected 130 and one SIGTERM to the run, got" \
+              "'$(cat "$out/g/02_individual/fake_signals" 2>/dev/null)'"; cat "$out/glog"; exit 1; }
+echo "sph-study Ctrl-C to the process group: ok"
+
+# The same with the real sph-run, as a terminal does it (the study a job of its own process group,
+# SIGINT to the group while global runs): sph-run finishes its step and writes stats.csv and
+# summary.json marked "interrupted" by the study's SIGTERM (before: it got the SIGINT and then the
+# SIGTERM, a second signal, and stopped at once with neither); its last words reach run.log.
+set -m
+"$tools/sph-study" scenes/martin_moyce.json --scale 0.296296 --end 30 --no-default-modes --config global \
+    --out "$out/t" > "$out/tlog" 2>&1 &
+study=$!
+set +m
+for _ in $(seq 600); do [ -e "$out/t/01_global/.sph-reserve" ] && break; sleep 0.1; done  # made before the first step
+sleep 0.5
+kill -INT -- "-$study" || true
+rc=0; wait "$study" || rc=$?
+[ "$rc" -eq 130 ] && grep -q '"by": "SIGTERM"' "$out/t/01_global/summary.json" && [ -s "$out/t/01_global/stats.csv" ] \
+    && grep -q "stopped by SIGTERM" "$out/t/01_global/run.log" \
+    || { echo "Ctrl-C to a study with the real sph-run: exit $rc, expected 130 and a summary marked interrupted by SIGTERM"
+         ls -a "$out/t/01_global"; cat "$out/tlog"; tail -3 "$out/t/01_global/run.log"; exit 1; }
+echo "sph-study Ctrl-C to the process group, real sph-run: ok"
 
 # The global run fails and the individual one is stopped by SIGTERM (summary.json "interrupted",
 # exit 143): the constant configuration, whose step is global's smallest, is skipped (no silent

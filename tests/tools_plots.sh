@@ -239,6 +239,28 @@ json.dump(s, open(sys.argv[1], "w"))' "$tmp/mt/scale0.296296_global/summary.json
   >"$tmp/mtr.out" 2>"$tmp/mtr.err"; rc=$?
 check "mode_table --reuse: an interrupted summary.json is run again (got $rc)" \
   '[ $rc -eq 0 ] && grep -q "not reusing .*_global/summary.json: interrupted (SIGINT at t = 0.01 s); running it again" "$tmp/mtr.err" && grep -q "not reusing .*_individual/summary.json: unreadable: " "$tmp/mtr.err" && [ "$(grep -c "^reusing .*_\(constant\|lv\)/summary.json" "$tmp/mtr.err")" -eq 2 ] && ! grep -q interrupted "$tmp/mt/scale0.296296_global/summary.json" && [ "$(cut -d, -f2,21 "$tmp/mt/mode_table.csv" | tr -d "\r" | tr "\n" " ")" = "mode,status constant,ok global,ok individual,ok lv,ok " ]'
+# --reuse takes a summary.json only of the run this invocation would make: another scene's
+# (before: a table headed by one scene whose rows were another's), another end time or scale
+# (0.2962961 shares the folder scale0.296296), another --extra value: each is named and run again.
+ht=("$py" "$src/tools/mode_table.py" "$src/scenes/hydrostatic_tank.json" --scales 0.296296 --end 0.02 --sph-run "$run")
+"${ht[@]}" --extra "lv:simulation.stepping.mode=individual,simulation.stepping.lambda_v=0.1" --reuse --out "$tmp/mt" \
+  >"$tmp/mth.out" 2>"$tmp/mth.err"; rc=$?
+check "mode_table --reuse, another scene's runs in --out: each named and run again (got $rc)" \
+  '[ $rc -eq 0 ] && [ "$(grep -c "^not reusing $tmp/mt/scale0.296296_[a-z]*/summary.json: another run'"'"'s (scene '"'"'martin_moyce'"'"', expected '"'"'hydrostatic_tank'"'"'); running it again$" "$tmp/mth.err")" -eq 4 ] && ! grep -q "^reusing" "$tmp/mth.err" && [ "$(cut -d, -f1,2,21 "$tmp/mt/mode_table.csv" | tr -d "\r" | tr "\n" " ")" = "scene,mode,status hydrostatic_tank,constant,ok hydrostatic_tank,global,ok hydrostatic_tank,individual,ok hydrostatic_tank,lv,ok " ]'
+"${ht[@]}" --extra "lv:simulation.stepping.mode=individual,simulation.stepping.lambda_v=0.2" --reuse --out "$tmp/mt" \
+  >"$tmp/mth.out" 2>"$tmp/mth.err"; rc=$?
+check "mode_table --reuse, --extra lv with another lambda_v: lv alone run again (got $rc)" \
+  '[ $rc -eq 0 ] && [ "$(grep -c "^reusing " "$tmp/mth.err")" -eq 3 ] && grep -q "^not reusing .*_lv/summary.json: another run'"'"'s (simulation.stepping.lambda_v 0.1, expected 0.2); running it again$" "$tmp/mth.err" && grep -q "\"lambda_v\": 0.2" "$tmp/mt/scale0.296296_lv/scene_as_run.json"'
+"$py" "$src/tools/mode_table.py" "$src/scenes/hydrostatic_tank.json" --scales 0.2962961 --end 0.03 --no-constant \
+  --sph-run "$run" --reuse --out "$tmp/mt" >"$tmp/mth.out" 2>"$tmp/mth.err"; rc=$?
+check "mode_table --reuse, another end time and scale: run again, both named (got $rc)" \
+  '[ $rc -eq 0 ] && grep -q "^not reusing .*_global/summary.json: another run'"'"'s (simulation.end_time 0.02, expected 0.03; simulation.scale 0.296296, expected 0.2962961); running it again$" "$tmp/mth.err" && [ "$(grep -c "^not reusing" "$tmp/mth.err")" -eq 2 ]'
+# Ctrl-C at a terminal (SIGINT to the tool's whole process group, which the fake sends during
+# the individual run): the run gets exactly one signal, the tool's SIGTERM, and saves its
+# summary marked "interrupted" by it; the tool dies by SIGINT, the table keeps the first two rows.
+FAKE_RULES='*_individual:int-group' setsid --wait "${mt[@]}" --out "$tmp/mti" >/dev/null 2>"$tmp/mti.err"; rc=$?
+check "mode_table, Ctrl-C to its process group (got $rc): one SIGTERM reaches the run ($(cat "$tmp/mti/scale0.296296_individual/fake_signals" 2>/dev/null)), which saves its summary" \
+  '[ $rc -eq 130 ] && [ "$(cat "$tmp/mti/scale0.296296_individual/fake_signals")" = TERM ] && grep -q "\"by\": \"SIGTERM\"" "$tmp/mti/scale0.296296_individual/summary.json" && grep -q "^mode_table.py: interrupted$" "$tmp/mti.err" && [ "$(cut -d, -f2,21 "$tmp/mti/mode_table.csv" | tr -d "\r" | tr "\n" " ")" = "mode,status constant,ok global,ok " ]'
 FAKE_RULES='*_individual:kill-tool' "${mt[@]}" --out "$tmp/mtk" >/dev/null 2>&1; rc=$?
 check "mode_table killed at its third run (got $rc): the table has the first two, complete" \
   '[ $rc -eq 137 ] && [ "$(cut -d, -f2,21 "$tmp/mtk/mode_table.csv" | tr -d "\r" | tr "\n" " ")" = "mode,status constant,ok global,ok " ]'

@@ -3,15 +3,17 @@
 artificial viscosities, and prints a Markdown table (the README's stability measurement).
 
 usage: tools/acoustic_study.py [SCENE.json ...] [--sph-run build/tools/sph-run] [--out out/acoustic_study]
-Runs are sequential so that wall times compare; each run's outputs are kept in --out.
+Runs are sequential so that wall times compare; each run's outputs (and its run.log) are kept in
+--out. Ctrl-C or SIGTERM stops the running sph-run (sph_python.run_child: it runs in its own
+session and gets one SIGTERM, so it finishes its step and saves its outputs) and ends the tool
+by that signal.
 """
 import argparse
 import json
 import pathlib
-import subprocess
 import sys
 import time
-from sph_python import errors_as_exit_2, positive_list  # noqa: E402 (tools/ is the script's folder)
+from sph_python import errors_as_exit_2, positive_list, run_child  # noqa: E402 (tools/ is the script's folder)
 
 errors_as_exit_2()
 
@@ -34,14 +36,15 @@ for scene in args.scenes:
                "--set", f"fluid.viscosity={alpha}", "--set", f"simulation.stepping.acoustic={'true' if acoustic else 'false'}"]
         print("running:", " ".join(cmd), file=sys.stderr, flush=True)
         t0 = time.time()
-        proc = subprocess.run(cmd, capture_output=True, text=True)
+        out.mkdir(parents=True, exist_ok=True)
+        returncode = run_child(cmd, out / "run.log")
         wall = time.time() - t0
-        if proc.returncode not in (0, 3):
+        last = ((out / "run.log").read_text(errors="replace").strip().splitlines() or [""])[-1]
+        if returncode not in (0, 3):
             # Not a run that went unstable (exit 3 keeps its outputs up to the failure) but bad input
             # or a broken run: its folder may hold an earlier run's outputs, so none is read.
-            print(f"acoustic_study.py: error: {' '.join(cmd)} exited {proc.returncode}: "
-                  f"{(proc.stderr.strip().splitlines() or [''])[-1]}", file=sys.stderr)
-            sys.exit(2 if proc.returncode == 2 else 1)
+            print(f"acoustic_study.py: error: {' '.join(cmd)} exited {returncode}: {last}", file=sys.stderr)
+            sys.exit(2 if returncode == 2 else 1)
         summary = json.loads((out / "summary.json").read_text()) if (out / "summary.json").exists() else {}
         stats = (out / "stats.csv").read_text().splitlines() if (out / "stats.csv").exists() else []
         header = stats[0].split(",") if stats else []
@@ -49,8 +52,8 @@ for scene in args.scenes:
         if header:
             k = header.index("rho_err_max")
             max_err = max(float(line.split(",")[k]) for line in stats[1:]) if len(stats) > 1 else 0.0
-        outcome = "completed" if proc.returncode == 0 else f"failed (exit {proc.returncode})"
-        detail = proc.stderr.strip().splitlines()[-1] if proc.returncode else ""
+        outcome = "completed" if returncode == 0 else f"failed (exit {returncode})"
+        detail = last if returncode else ""
         rows.append((stem, alpha, acoustic, outcome, summary.get("simulated_time_s", 0.0), summary.get("steps", len(stats) - 1),
                      summary.get("avg_dt_s", 0.0), max_err, wall, detail, summary.get("boundary_collisions_total", 0)))
 

@@ -31,7 +31,7 @@ import statistics
 import sys
 import time
 from sph_python import errors_as_exit_2, exit_if_unusable, log_tail, md_cell, positive_list, read_csv_columns, \
-    require, sph_run, write_atomic  # noqa: E402 (tools/ is the script's folder)
+    require, scene_copy, sph_run, write_atomic  # noqa: E402 (tools/ is the script's folder)
 
 errors_as_exit_2()
 
@@ -80,8 +80,9 @@ for handling in ("ihmsen", "direct_forcing"):
         out = out_root / f"{handling}_{dt:g}"
         out.mkdir(parents=True, exist_ok=True)
         # The scene with a fluid probe sampled every step (engine/run/probes.hpp: whole-fluid and
-        # interior density errors). Written next to the outputs; the scene has no relative files.
-        probed = dict(scene)
+        # interior density errors). Written next to the outputs, its relative files (a mesh's OBJ)
+        # made absolute from the scene's folder (scene_copy), so that it loads there.
+        probed = scene_copy(scene, args.scene)
         probed["probes"] = [{"type": "fluid", "name": "fluid", "rate": 1.0 / dt}]
         scene_file = out / "scene.json"
         scene_file.write_text(json.dumps(probed, indent=1))

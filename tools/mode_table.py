@@ -25,21 +25,29 @@ reports failed, stopped by a signal, or whose summary.json cannot be read, is le
 row's medians and named in the row's `status` (CSV) and under the table: "failed (exit N)",
 "interrupted (<signal> at t = T s)", "unreadable: <file>: <reason>"; a configuration with no
 usable run is a row with only that status, and without a usable first `global` run the
-`constant` one is skipped. --reuse takes a summary.json only if it is readable and not marked
-"interrupted"; any other is run again. Exit codes: 0 every run usable; 2 bad arguments (a
+`constant` one is skipped. --reuse takes a summary.json only if it is readable, not marked
+"interrupted", and of the run this invocation would make, as the run recorded it (summary.json's
+`scene` and `threads`; its scene_as_run.json's simulation.end_time, simulation.scale and the
+value of every KEY=VALUE of its configuration, the constant step included); any other is run
+again, saying why ("not reusing <folder>/summary.json: another run's (simulation.end_time 0.02,
+expected 0.3); running it again"). A scene file edited under the same `name` is not told apart:
+do not reuse runs of an earlier version of the scene. Exit codes: 0 every run usable; 2 bad arguments (a
 malformed --extra, say), before any run, or, after writing the tables, a run not usable (one
 line, `mode_table.py: error: ...`); 130 / 143 interrupted (Ctrl-C / SIGTERM: the running sph-run
-is stopped and waited for).
+gets one SIGTERM, finishes its step and saves its outputs, summary.json marked "interrupted", and
+is waited for).
 """
 import argparse
+import json
+import math
 import os
 import pathlib
 import platform
 import statistics
 import sys
 import time
-from sph_python import csv_text, errors_as_exit_2, exit_if_unusable, log_tail, md_cell, md_status_row, positive_list, \
-    read_run, require, sph_run, write_atomic  # noqa: E402 (tools/ is the script's folder)
+from sph_python import Unreadable, csv_text, errors_as_exit_2, exit_if_unusable, log_tail, md_cell, md_status_row, \
+    positive_list, read_json_object, read_run, require, sph_run, write_atomic  # noqa: E402 (tools/ is the script's folder)
 
 errors_as_exit_2()
 
@@ -53,8 +61,10 @@ ap.add_argument("--repeat", type=int, default=1, help="runs per configuration, i
 ap.add_argument("--sph-run", default="build/tools/sph-run")
 ap.add_argument("--out", default="out/mode_table")
 ap.add_argument("--reuse", action="store_true",
-                help="read a run's summary.json from --out if it is there, readable and not marked interrupted "
-                     "instead of running it again (re-tabulates an earlier or interrupted table with the same options)")
+                help="read a run's summary.json from --out if it is there, readable, not marked interrupted and of "
+                     "the same scene, end time, scale, threads and configuration (as the run recorded them) instead "
+                     "of running it again (re-tabulates an earlier or interrupted table with the same options); "
+                     "any other is run again, saying why")
 ap.add_argument("--extra", action="append", default=[],
                 help="an extra configuration NAME:KEY=VALUE[,KEY=VALUE...], e.g. 'individual(global λ):"
                      "simulation.stepping.mode=individual,simulation.stepping.lambda_v=0.1'")
@@ -103,6 +113,80 @@ SUMMARY_NUMBERS = ("wall_time_s", "steps", "fluid_particles", "simulated_time_s"
                    "avg_active_fraction", "max_density_error", "boundary_collisions_total")
 
 
+def override(assignment):
+    """A --set KEY=VALUE as sph-run reads it (engine/data/scene_overrides.cpp parse_override):
+    (the JSON pointer's keys, the value: JSON if it parses, else the bare word)."""
+    key, _, text = assignment.partition("=")
+    key, text = key.strip(), text.strip()
+    if key.startswith("/"):
+        path = [t.replace("~1", "/").replace("~0", "~") for t in key[1:].split("/")]
+    else:
+        path = key.split(".")
+    try:
+        value = json.loads(text)
+    except ValueError:
+        value = text
+    return path, value
+
+
+def same(recorded, wanted):
+    """A recorded setting equal to the wanted one: numbers to 1e-9 (relative; the JSON of a double
+    round-trips, this leaves room for a step rounded to whole ticks), anything else exactly."""
+    def number(x):
+        return isinstance(x, (int, float)) and not isinstance(x, bool)
+    if number(recorded) and number(wanted):
+        return math.isclose(recorded, wanted, rel_tol=1e-9, abs_tol=1e-300)
+    return recorded == wanted
+
+
+_scene = None
+
+
+def scene_json():
+    """The scene file's JSON object (read once; exit 2 naming it if it is not one)."""
+    global _scene
+    if _scene is None:
+        _scene = json.loads(pathlib.Path(args.scene).read_text())
+        require(isinstance(_scene, dict), f"{args.scene}: expected a JSON object (a scene), found {type(_scene).__name__}")
+    return _scene
+
+
+def mismatch(out, summary, scale, sets):
+    """Why the usable run in `out` (summary: its summary.json) is not the one this invocation
+    would make, as the run recorded it, or None: another scene (summary.json's `scene` against
+    the scene file's `name`), or else every difference of
+    its scene_as_run.json's simulation.end_time (with --end, or the scene's own end_time),
+    simulation.scale and each KEY=VALUE of `sets`, and of summary.json's `threads` (--threads,
+    at most this machine's cores, as sph-run runs it). A run without a readable
+    scene_as_run.json cannot be checked: that is the reason then."""
+    scene = scene_json()
+    name = scene.get("name")  # sph-run runs no scene without one
+    if summary.get("scene") != name:
+        return f"scene {summary.get('scene')!r}, expected {name!r}"
+    try:
+        ran = read_json_object(out / "scene_as_run.json")
+    except Unreadable as e:
+        return f"its settings cannot be checked: {e}"
+    end = args.end if args.end is not None else scene.get("simulation", {}).get("end_time")
+    wanted = ([(["simulation", "end_time"], end)] if end is not None else []) + \
+        [(["simulation", "scale"], scale)] + [override(s) for s in sets]
+    why = []
+    absent = object()
+    for path, value in wanted:
+        got = ran
+        for key in path:
+            got = got.get(key, absent) if isinstance(got, dict) else absent
+        if got is absent:
+            why.append(f"no {'.'.join(path)} in its scene_as_run.json, expected {json.dumps(value)}")
+        elif not same(got, value):
+            why.append(f"{'.'.join(path)} {json.dumps(got)}, expected {json.dumps(value)}")
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    threads = cores if args.threads <= 0 else min(args.threads, cores or args.threads)
+    if summary.get("threads") != threads:
+        why.append(f"threads {summary.get('threads')}, expected {threads}")
+    return "; ".join(why) or None
+
+
 def run(tag, scale, sets, rep=0):
     """(summary, None) of a run, or (None, "failed (exit N)" / "interrupted (...)" / "unreadable: <file>: <reason>")."""
     out = out_root / f"scale{scale:g}_{folder(tag)}"
@@ -115,6 +199,9 @@ def run(tag, scale, sets, rep=0):
         cmd += ["--set", s]
     if args.reuse and (out / "summary.json").exists():
         s, status = read_run(out, numbers=SUMMARY_NUMBERS, keys=("scene",))
+        other = None if status else mismatch(out, s, scale, sets)
+        if other:
+            status = f"another run's ({other})"
         if not status:
             print(f"reusing {out / 'summary.json'}", file=sys.stderr, flush=True)
             return s, None

@@ -11,16 +11,17 @@ lambda_f = 0.25 (summary.json: pcisph.dt_eq14_15). Speed-up = constant wall / ad
 ratio (simulated time / Δt_const, over the adaptive run's kept steps) is the speed-up at equal
 cost per step; with --no-constant it is the only ratio (the constant run is not made).
 Writes pcisph_table.md / .csv into --out and, for every scene, dt_<scene>.png: the adaptive
-step over simulated time (the paper's Fig. 4), rolled-back steps marked.
+step over simulated time (the paper's Fig. 4), rolled-back steps marked. Each run's output goes to
+run.log in its folder; Ctrl-C or SIGTERM stops the running sph-run (one SIGTERM: it finishes its
+step and saves its outputs) and ends the tool by that signal.
 """
 import argparse
 import csv
 import json
 import pathlib
-import subprocess
 import sys
 import time
-from sph_python import errors_as_exit_2  # noqa: E402 (tools/ is the script's folder)
+from sph_python import errors_as_exit_2, log_tail, run_child  # noqa: E402 (tools/ is the script's folder)
 
 errors_as_exit_2()
 
@@ -54,9 +55,10 @@ def run(scene, tag, sets):
     for s in args.set + sets:
         cmd += ["--set", s]
     print(f"[{time.strftime('%H:%M:%S')}] {' '.join(cmd)}", file=sys.stderr, flush=True)
-    p = subprocess.run(cmd, capture_output=True, text=True)
-    if p.returncode != 0:
-        sys.exit(f"run failed (exit {p.returncode}): {' '.join(cmd)}\n{p.stderr.strip()}")
+    out.mkdir(parents=True, exist_ok=True)
+    rc = run_child(cmd, out / "run.log")  # in its own session: Ctrl-C reaches this tool, which stops it (one SIGTERM)
+    if rc != 0:
+        sys.exit(f"run failed (exit {rc}): {' '.join(cmd)}\n{log_tail(out)}")
     return out, json.loads((out / "summary.json").read_text())
 
 

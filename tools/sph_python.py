@@ -9,9 +9,10 @@ Also the tools' shared handling of bad input and of their tables: `fail`, `requi
 end the tool by that signal), `Unreadable` and the readers of a run's outputs that raise it
 (`read_json_object`, `read_csv_columns`, `reading`), `write_atomic` (a table that is always
 complete on disk), and what the study tools share about a run of sph-run: `run_child` (a child
-never outlives its tool), `sph_run` and `read_run` (a run is usable, or "failed (exit N)",
-"interrupted (...)" or "unreadable: <file>: <reason>"), `md_cell`/`md_status_row` and
-`exit_if_unusable`."""
+in its own session, so that a terminal's Ctrl-C reaches the tool alone, which forwards one SIGTERM;
+it never outlives its tool), `sph_run` and `read_run` (a run is usable, or "failed (exit N)",
+"interrupted (...)" or "unreadable: <file>: <reason>"), `scene_copy` (a scene to write elsewhere,
+its relative files made absolute), `md_cell`/`md_status_row` and `exit_if_unusable`."""
 import contextlib
 import csv
 import importlib.util
@@ -44,14 +45,17 @@ def need(*modules):
 
 
 class Stopped(KeyboardInterrupt):
-    """SIGTERM, raised where the tool is as Ctrl-C raises KeyboardInterrupt (errors_as_exit_2
-    installs the handler), so that both unwind the same way: a running child is ended and
-    waited for (run_child), then the tool dies by the signal."""
-    signum = signal.SIGTERM
+    """SIGTERM (or SIGHUP: the terminal closed), raised where the tool is as Ctrl-C raises
+    KeyboardInterrupt (errors_as_exit_2 installs the handler), so that all unwind the same way: a
+    running child is ended and waited for (run_child), then the tool dies by the signal,
+    `signum`."""
+    def __init__(self, signum=signal.SIGTERM):
+        super().__init__()
+        self.signum = signum
 
 
 def _raise_stopped(signum, frame):
-    raise Stopped()
+    raise Stopped(signum)
 
 
 def die_by(signum):
@@ -70,9 +74,11 @@ def errors_as_exit_2():
     (OSError) or parsed (JSON or text: JSONDecodeError, UnicodeDecodeError; CSV: csv.Error, and
     `Unreadable`, which read_csv_columns and the readers of a run's outputs raise) ends the tool
     with one line, `<tool>: error: <what>`, and exit code 2, instead of a traceback. Ctrl-C
-    (KeyboardInterrupt) and SIGTERM (raised as `Stopped`) end it with `<tool>: interrupted` and
-    then by that signal itself (the shell sees 130 or 143). Other exceptions (bugs, a ValueError
-    of a computation among them) keep Python's traceback and exit 1."""
+    (KeyboardInterrupt), SIGTERM and SIGHUP (raised as `Stopped`; SIGHUP only if not ignored, as
+    under nohup) end it with `<tool>: interrupted` and then by that signal itself (the shell sees
+    130, 143 or 129). SIGHUP is caught because a run of sph-run is in its own session (run_child)
+    and would not get the terminal's hangup: the tool ends it. Other exceptions (bugs, a
+    ValueError of a computation among them) keep Python's traceback and exit 1."""
     default = sys.excepthook
 
     def hook(kind, value, tb):
@@ -96,6 +102,8 @@ def errors_as_exit_2():
 
     sys.excepthook = hook
     signal.signal(signal.SIGTERM, _raise_stopped)
+    if signal.getsignal(signal.SIGHUP) == signal.SIG_DFL:
+        signal.signal(signal.SIGHUP, _raise_stopped)
 
 
 def positive_list(text, option, allow_zero=False):
@@ -265,9 +273,11 @@ def md_status_row(label, status, columns):
 # ---- a run of sph-run, as the study tools start and classify it ----
 
 def end_child(proc, grace=10.0):
-    """End a running child: SIGTERM (sph-run then stops after the step in progress), SIGKILL
-    if it is still there after `grace` seconds or if another signal interrupts the wait; then
-    wait for it, so that it never outlives the tool."""
+    """End a running child: SIGTERM (sph-run then stops after the step in progress and saves its
+    outputs, summary.json marked "interrupted"; being in its own session (run_child), it gets no
+    other signal, which it would take for a second one and stop at once), SIGKILL if it is still
+    there after `grace` seconds or if another signal interrupts the wait; then wait for it, so
+    that it never outlives the tool."""
     if proc.poll() is not None:
         return
     try:
@@ -282,10 +292,14 @@ def end_child(proc, grace=10.0):
 
 def run_child(cmd, log, echo=None):
     """Run `cmd`, its stdout and stderr into the file `log` (each line also given to `echo`,
-    if any, as it comes); returns its exit code. On any exception while it runs (Ctrl-C,
-    SIGTERM, a bug) the child is ended and waited for (end_child) before the exception goes on."""
+    if any, as it comes); returns its exit code. The child runs in a session (and so a process
+    group) of its own: a terminal's Ctrl-C, sent to the terminal's foreground process group,
+    reaches the tool only. On any exception while it runs (Ctrl-C, SIGTERM, SIGHUP, a bug) the
+    child is ended and waited for (end_child: one SIGTERM) and what it wrote meanwhile goes to
+    `log` (and `echo`) before the exception goes on."""
     with open(log, "w") as f:
-        proc = subprocess.Popen(cmd, stdout=subprocess.PIPE if echo else f, stderr=subprocess.STDOUT, text=True)
+        proc = subprocess.Popen(cmd, stdout=subprocess.PIPE if echo else f, stderr=subprocess.STDOUT, text=True,
+                                start_new_session=True)
         try:
             if echo:
                 for line in proc.stdout:
@@ -294,10 +308,38 @@ def run_child(cmd, log, echo=None):
             return proc.wait()
         except BaseException:
             end_child(proc)
+            if echo:
+                with contextlib.suppress(Exception):  # its last words: where it stopped, what it saved
+                    for line in proc.stdout.read().splitlines(keepends=True):
+                        f.write(line)
+                        echo(line)
             raise
         finally:
             if proc.stdout:
                 proc.stdout.close()
+
+
+def scene_copy(scene, scene_path):
+    """A copy of the scene `scene` (its JSON, read from `scene_path`) to write into another
+    folder: every relative file it names, which sph-run and the tools read relative to the scene
+    file's folder (a boundary's `file`, the OBJ of a mesh; a probe's `experiment.file`), made
+    absolute from scene_path's folder, so that the copy loads wherever it is written. Values that
+    are not non-empty strings are left for sph-run to report."""
+    copy = json.loads(json.dumps(scene))
+    home = pathlib.Path(os.path.abspath(scene_path)).parent
+
+    def absolute(holder):
+        f = holder.get("file") if isinstance(holder, dict) else None
+        if isinstance(f, str) and f and not os.path.isabs(f):
+            holder["file"] = str(home / f)
+
+    if isinstance(copy, dict):
+        for boundary in copy.get("boundaries", []) if isinstance(copy.get("boundaries"), list) else []:
+            absolute(boundary)
+        for probe in copy.get("probes", []) if isinstance(copy.get("probes"), list) else []:
+            if isinstance(probe, dict):
+                absolute(probe.get("experiment"))
+    return copy
 
 
 def interrupted_status(summary):

@@ -22,6 +22,11 @@ parallel, so that wall times compare), and writes into --out:
   dt.png                dt_sim (log) and active fraction over time of every run, overlaid
                         (tools/plot_dt.py: He et al. Fig. 2; Ihmsen et al. Fig. 4).
   <run>/                every run's outputs (stats.csv, summary.json, probes/, run.log).
+  <stem>.study.json     for a scene without a fluid probe, the scene the runs read: a copy with
+                        one added (`study_fluid`: the kinetic energy is always compared) and its
+                        relative files (a mesh's OBJ, an experiment's CSV) made absolute from the
+                        scene's folder. The scene file itself is never written, also when --out
+                        is its folder.
 
 When. study.md and study.csv are rewritten after every run (into a temporary file in --out, then
 renamed onto the table: never half-written), so a study that is interrupted or crashes leaves the
@@ -35,10 +40,13 @@ summary.json, stats.csv or probe files cannot be read (missing, truncated, not J
 Configurations) a row "skipped: <why>". If the reference run fails or cannot be read, every row
 keeps its cost columns, the accuracy columns are empty, "accuracy note" says "unavailable:
 <reason>" and there is no pareto.png. Exit codes: 0 the tables are complete ("failed" and
-"skipped" rows included); 2 bad arguments, before any run, or, after writing the tables, a run
-unreadable or interrupted, or the reference unavailable (one line, `sph-study: error: ...`);
-130 / 143 interrupted (Ctrl-C / SIGTERM: the running sph-run is stopped and waited for, and the
-study dies by that signal), the tables holding the runs finished before.
+"skipped" rows included); 2 bad arguments, before any run and before anything is written, or,
+after writing the tables, a run unreadable or interrupted, or the reference unavailable (one
+line, `sph-study: error: ...`); 130 / 143 interrupted (Ctrl-C / SIGTERM: the running sph-run, in
+a session of its own so that a terminal's Ctrl-C reaches the study only, gets one SIGTERM, and
+SIGKILL after 10 s; it finishes its step and writes its outputs, summary.json marked
+"interrupted"; the study waits for it and dies by that signal), the tables holding the runs
+finished before.
 
 Configurations. By default every `method mode` pair the scene loads with (sph-run
 --list-modes), so a mode added to the engine joins the study with no change here; --config adds
@@ -189,6 +197,8 @@ def source_commit():
 
 class Study:
     def __init__(self, args):
+        """Reads the scene and the arguments; writes nothing (write_scene does, once every
+        argument is checked)."""
         self.a = args
         self.scene = pathlib.Path(args.scene)
         if not self.scene.is_file():
@@ -209,12 +219,11 @@ class Study:
         self.probes = self.scene_json.get("probes", [])
         self.fluid_probe = next((p.get("name", f"fluid_{i}") for i, p in enumerate(self.probes)
                                  if p.get("type") == "fluid"), None)
-        self.scene_path = self.scene
+        self.scene_path = self.scene  # the scene the runs read: this one, or write_scene's copy
+        self.copy_json = None
         if self.fluid_probe is None:  # kinetic energy is always compared: add a whole-fluid probe
             self.scene_json.setdefault("probes", []).append({"type": "fluid", "name": "study_fluid", "rate": 100})
-            self.out.mkdir(parents=True, exist_ok=True)
-            self.scene_path = self.out / self.scene.name
-            self.scene_path.write_text(json.dumps(self.scene_json, indent=2))
+            self.copy_json = sph_python.scene_copy(self.scene_json, self.scene)
             self.fluid_probe = "study_fluid"
             self.probes = self.scene_json["probes"]
         for i, probe in enumerate(self.probes):  # the engine's default name, <type>_<index>
@@ -225,6 +234,19 @@ class Study:
         self.ref_note = "pending: the reference runs after the configurations"  # None once it is read
         self.started = datetime.datetime.now()
         self.context = f"{args.threads} threads, {machine()}, {self.started:%Y-%m-%d %H:%M}, engine {source_commit()}"
+
+    def write_scene(self):
+        """The runs' scene: with a fluid probe added (__init__), the copy <stem>.study.json in
+        --out, its relative files absolute (sph_python.scene_copy). Never the scene itself: a
+        copy path that is the scene (a link to it in --out) is refused, exit 2."""
+        if self.copy_json is None:
+            return
+        copy = self.out / f"{self.scene.stem}.study.json"
+        if copy.resolve() == self.scene.resolve():
+            fail(f"--out {self.out}: its {copy.name} is the scene {self.scene} itself (a link to it?), where the study "
+                 f"would write its copy of the scene: give another --out")
+        write_atomic(copy, json.dumps(self.copy_json, indent=2) + "\n")
+        self.scene_path = copy
 
     def sph_run(self, extra, out_dir, label, index, total, then=None):
         """One run (sph_python.sph_run; its output into out_dir/run.log, progress lines echoed):
@@ -258,10 +280,11 @@ class Study:
         return s, None
 
     def list_modes(self):
-        """The "method mode" pairs the scene loads with (asked of sph-run once, then kept)."""
+        """The "method mode" pairs the scene loads with (asked of sph-run once, then kept; of the
+        scene itself, before write_scene, as the added probe changes no mode)."""
         if getattr(self, "_modes", None) is not None:
             return self._modes
-        proc = subprocess.run([self.a.sph_run, str(self.scene_path), "--list-modes", "-q"] +
+        proc = subprocess.run([self.a.sph_run, str(self.scene), "--list-modes", "-q"] +
                               sum((["--set", s] for s in self.common), []), capture_output=True, text=True)
         if proc.returncode != 0:
             fail(f"sph-run --list-modes failed: {proc.stderr.strip()}")
@@ -269,6 +292,8 @@ class Study:
         return self._modes
 
     def configurations(self):
+        """Every configuration to run (the scene's modes unless --no-default-modes, then each
+        --config); exit 2 if there is none. main asks before anything is written."""
         configs = []
         if not self.a.no_default_modes:
             for method, mode in self.list_modes():
@@ -446,7 +471,7 @@ class Study:
 
     def run(self):
         """Every configuration, then the reference; the tables are rewritten after each run."""
-        configs = self.configs = self.configurations()
+        configs = self.configs = self.configs or self.configurations()
         # Adaptive runs first: a `constant` configuration takes its step from them.
         order = sorted(range(len(configs)), key=lambda k: configs[k]["mode"] == "constant")
         results = self.results = [None] * len(configs)
@@ -718,10 +743,6 @@ def main():
         if why:
             fail(why)
         study.ref_note = None
-    try:
-        study.out.mkdir(parents=True, exist_ok=True)
-    except OSError as e:
-        fail(f"--out {study.out}: cannot create the output folder ({e.strerror or e})")
     known = {tuple(m) for m in study.list_modes()}  # every "method mode" pair the scene loads with
     for spec in args.config:
         c = parse_config(spec)
@@ -729,7 +750,14 @@ def main():
         if (method, c["mode"]) not in known:
             fail(f"--config {spec!r}: no mode {method}/{c['mode']} for this scene (it loads with: "
                  + ", ".join(f"{m}/{o}" for m, o in sorted(known)) + ")")
+    study.configs = study.configurations()  # "no configurations": exit 2 before anything is written
     study.measured = read_experiments(study.scene, study.probes)  # before any run: a bad file stops the study now
+    # Every argument checked: now the output folder, and the runs' copy of the scene in it.
+    try:
+        study.out.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        fail(f"--out {study.out}: cannot create the output folder ({e.strerror or e})")
+    study.write_scene()
     rows, text = study.run()
     print()
     print(text)
