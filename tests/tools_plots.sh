@@ -363,5 +363,13 @@ sys.exit(1 if bad else 0)
 EOF
 check "sph_python: write_atomic interrupted, a CSV cut short, Markdown cells, runs classified, tools ended by Ctrl-C/SIGTERM" '[ $rc -eq 0 ]'
 
+# pcisph_table.py --reuse keeps a run only if its pcisph_table.json records this very command:
+# the same again is reused; another --end is run again, saying why (it reused any summary.json).
+pt=("$py" "$src/tools/pcisph_table.py" "$src/scenes/shock.json" --scale 0.5 --no-constant --sph-run "$run" --out "$tmp/pt")
+"${pt[@]}" --end 0.005 >/dev/null 2>&1 && "${pt[@]}" --end 0.005 --reuse >/dev/null 2>"$tmp/pt_same"; rc=$?
+"${pt[@]}" --end 0.008 --reuse >/dev/null 2>"$tmp/pt_other"; rc2=$?
+check "pcisph_table --reuse: the same command reused, another --end run again (got $rc, $rc2)" \
+  '[ $rc -eq 0 ] && [ $rc2 -eq 0 ] && grep -q "^reusing .*shock_adaptive" "$tmp/pt_same" && grep -q "not reusing .*shock_adaptive/summary.json: another scene or other options; running it again" "$tmp/pt_other" && [ "$(python3 -c "import json; print(json.load(open(\"$tmp/pt/shock_adaptive/scene_as_run.json\"))[\"simulation\"][\"end_time\"])")" = 0.008 ]'
+
 [ $fail -eq 0 ] && echo "tools plots: all checks passed"
 exit $fail

@@ -17,6 +17,7 @@ step and saves its outputs) and ends the tool by that signal.
 """
 import argparse
 import csv
+import hashlib
 import json
 import pathlib
 import sys
@@ -34,7 +35,9 @@ ap.add_argument("--no-constant", action="store_true")
 ap.add_argument("--sph-run", default="build/tools/sph-run")
 ap.add_argument("--out", default="out/pcisph_table")
 ap.add_argument("--set", action="append", default=[], help="extra --set for both runs")
-ap.add_argument("--reuse", action="store_true", help="keep a run whose summary.json already exists in --out")
+ap.add_argument("--reuse", action="store_true",
+                help="keep a run whose summary.json exists in --out if it was made by this same command "
+                     "(the scene file unchanged, the same options); others are run again")
 args = ap.parse_args()
 if not pathlib.Path(args.sph_run).exists():
     sys.exit(f"{args.sph_run}: not found (build first)")
@@ -43,10 +46,10 @@ out_root.mkdir(parents=True, exist_ok=True)
 
 
 def run(scene, tag, sets):
+    """A run's folder and summary. With --reuse, a folder whose summary.json exists is kept only
+    when its `pcisph_table.json` records this very command (the scene file's absolute path, its
+    contents' SHA-256 and every argument); another (or an unrecorded) run is made again, saying why."""
     out = out_root / f"{pathlib.Path(scene).stem}_{tag}"
-    if args.reuse and (out / "summary.json").is_file():
-        print(f"reusing {out}", file=sys.stderr)
-        return out, json.loads((out / "summary.json").read_text())
     cmd = [args.sph_run, scene, "--threads", str(args.threads), "--no-frames", "-q", "--out", str(out)]
     if args.end is not None:
         cmd += ["--end", str(args.end)]
@@ -54,11 +57,25 @@ def run(scene, tag, sets):
         cmd += ["--scale", str(args.scale)]
     for s in args.set + sets:
         cmd += ["--set", s]
+    record = {"scene": str(pathlib.Path(scene).resolve()),
+              "scene_sha256": hashlib.sha256(pathlib.Path(scene).read_bytes()).hexdigest(), "command": cmd[2:]}
+    if args.reuse and (out / "summary.json").is_file():
+        try:
+            kept = json.loads((out / "pcisph_table.json").read_text())
+        except (OSError, ValueError):
+            kept = None
+        if kept == record:
+            print(f"reusing {out}", file=sys.stderr)
+            return out, json.loads((out / "summary.json").read_text())
+        why = "no pcisph_table.json records its command" if kept is None else "another scene or other options"
+        print(f"not reusing {out / 'summary.json'}: {why}; running it again", file=sys.stderr, flush=True)
     print(f"[{time.strftime('%H:%M:%S')}] {' '.join(cmd)}", file=sys.stderr, flush=True)
     out.mkdir(parents=True, exist_ok=True)
+    (out / "pcisph_table.json").unlink(missing_ok=True)
     rc = run_child(cmd, out / "run.log")  # in its own session: Ctrl-C reaches this tool, which stops it (one SIGTERM)
     if rc != 0:
         sys.exit(f"run failed (exit {rc}): {' '.join(cmd)}\n{log_tail(out)}")
+    (out / "pcisph_table.json").write_text(json.dumps(record, indent=1) + "\n")
     return out, json.loads((out / "summary.json").read_text())
 
 
