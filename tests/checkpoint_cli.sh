@@ -149,7 +149,7 @@ echo '{"name": "another run"}' > "$tmp/c5/scene_as_run.json"; cp "$tmp/c5/run.js
 check "resume into a folder whose stats.csv has other columns exits 2 naming it, the folder's files untouched, no reserve left (got $rc)" \
   '[ $rc -eq 2 ] && grep -q "c5/stats.csv: its columns differ" "$tmp/e5" && cmp -s "$tmp/c5/stats.csv" "$tmp/c5.before" && [ ! -e "$tmp/c5/.sph-reserve" ] && grep -q "another run" "$tmp/c5/scene_as_run.json" && cmp -s "$tmp/c5/run.json" "$tmp/c5.run.json"'
 # A stats.csv shorter than the checkpoint's (another run's folder): refused, and the 5 MiB reserve
-# the run made before reading it removed (until 2026-12-07 it was left in the folder).
+# the run made before reading it removed.
 cp -r "$tmp/a" "$tmp/c6"; head -n 3 "$tmp/a/stats.csv" > "$tmp/c6/stats.csv"
 "$run" --resume "$tmp/c6/checkpoints/$first" --out "$tmp/c6" -q 2>"$tmp/e6"; rc=$?
 check "resume into a folder whose stats.csv is shorter than the checkpoint's exits 2 naming it, no reserve left (got $rc)" \

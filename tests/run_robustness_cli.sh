@@ -94,8 +94,7 @@ mkdir full && if mount -t tmpfs -o size=5400k tmpfs full 2>/dev/null; then
   rm -rf full/run
   # The simulation fails (a NaN injected at step 400) on a disk with room for the reserve and
   # 80 KiB more: the failed run's records do not fit, so they go into the reserve as above,
-  # marked failed and output_failed. (Until 2026-12-07 that path skipped the reserve: exit 3 and
-  # no stats.csv, summary.json or probes.)
+  # marked failed and output_failed.
   head -c 200K /dev/zero > full/filler
   "$run" "$scene" --scale 0.5 --end 0.5 --no-frames -q --inject-nan 400:5 --out full/nan 2>e_fullnan; rc=$?
   check "disk full when a run fails: exit 3, its records saved from the reserve (got $rc)" \
@@ -117,7 +116,7 @@ fi
 
 # 4c. Replacing an earlier run's outputs is all or nothing: with its frames/ a read-only mount (it
 # cannot be moved or emptied), a fresh run into the folder exits 5 naming it and every output of
-# the earlier run is still there (until 2026-12-07 the files before frames/ in the list were gone).
+# the earlier run is still there.
 "$run" "$scene" --scale 0.5 --end 0.01 -q --out prev 2>/dev/null
 ls -A prev | sort > prev.before
 if mount --bind prev/frames prev/frames 2>/dev/null && mount -o remount,ro,bind prev/frames 2>/dev/null; then

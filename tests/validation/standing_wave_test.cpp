@@ -121,11 +121,10 @@ Wave run_wave(double r, bool continuity, double alpha, double nu, double end, do
 // amplitude as 20 % of the rate. The 20 % is asserted at 5 mm (the disabled test below).
 // The symmetric runs hold what is measured, so that a change that adds dissipation or detunes
 // the wave fails: period within 8 %, the extrapolated walls' decay at most 6x laminar and at most
-// 0.6 of the alpha = 0.1 run's and of the mirrored walls'. Since 2026-12-07 these three runs last
-// 1.7 periods (three extrema) instead of 3.2, a quarter off the test's time; measured then: the
-// symmetric run 4.30x laminar (4.31x over 3.2 periods), the mirrored walls 9.94x (10.1x), alpha 0.1
-// 9.22x with its period -5.1 % (over 3.2 periods it read 32x and -47 %: its wave is gone by the
-// second period and the fit follows the noise), so the ratios are 0.47 and 0.43.
+// 0.6 of the alpha = 0.1 run's and of the mirrored walls'. These three runs last 1.7 periods (three
+// extrema); measured 2026-12-07: the symmetric run 4.30x laminar, the mirrored walls 9.94x, alpha
+// 0.1 9.22x with its period -5.1 %, so the ratios are 0.47 and 0.43 (over 3.2 periods alpha 0.1
+// read 32x and -47 %: its wave is gone by the second period and the fit follows the noise).
 TEST(StandingWave, PeriodAndDecayAgainstLinearTheory) {
     const double k = std::numbers::pi / kL, omega = std::sqrt(kG * k * std::tanh(k * kDepth));
     const double period = 2 * std::numbers::pi / omega;
