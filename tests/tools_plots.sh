@@ -255,6 +255,13 @@ check "mode_table --reuse, --extra lv with another lambda_v: lv alone run again 
   --sph-run "$run" --reuse --out "$tmp/mt" >"$tmp/mth.out" 2>"$tmp/mth.err"; rc=$?
 check "mode_table --reuse, another end time and scale: run again, both named (got $rc)" \
   '[ $rc -eq 0 ] && grep -q "^not reusing .*_global/summary.json: another run'"'"'s (simulation.end_time 0.02, expected 0.03; simulation.scale 0.296296, expected 0.2962961); running it again$" "$tmp/mth.err" && [ "$(grep -c "^not reusing" "$tmp/mth.err")" -eq 2 ]'
+# A scene file edited since its runs, under the same name: --reuse runs them again, saying why.
+cp "$src/scenes/hydrostatic_tank.json" "$tmp/tank.json"
+et=("$py" "$src/tools/mode_table.py" "$tmp/tank.json" --scales 0.296296 --end 0.02 --no-constant --sph-run "$run" --out "$tmp/mte")
+"${et[@]}" >/dev/null 2>&1; sed -i 's/"viscosity": *[0-9.e-]*/"viscosity": 0.2/' "$tmp/tank.json"
+"${et[@]}" --reuse >/dev/null 2>"$tmp/mte.err"; rc=$?
+check "mode_table --reuse, the scene file edited since: each run named and run again (got $rc)" \
+  '[ $rc -eq 0 ] && [ "$(grep -c "^not reusing .*summary.json: another run.s (the scene file has changed since (its SHA-256 differs)); running it again$" "$tmp/mte.err")" -eq 2 ] && grep -q "\"viscosity\": 0.2" "$tmp/mte/scale0.296296_global/scene_as_run.json"'
 # Ctrl-C at a terminal (SIGINT to the tool's whole process group, which the fake sends during
 # the individual run): the run gets exactly one signal, the tool's SIGTERM, and saves its
 # summary marked "interrupted" by it; the tool dies by SIGINT, the table keeps the first two rows.

@@ -30,14 +30,17 @@ usable run is a row with only that status, and without a usable first `global` r
 `scene` and `threads`; its scene_as_run.json's simulation.end_time, simulation.scale and the
 value of every KEY=VALUE of its configuration, the constant step included); any other is run
 again, saying why ("not reusing <folder>/summary.json: another run's (simulation.end_time 0.02,
-expected 0.3); running it again"). A scene file edited under the same `name` is not told apart:
-do not reuse runs of an earlier version of the scene. Exit codes: 0 every run usable; 2 bad arguments (a
+expected 0.3); running it again"), as is a run of the scene file before an edit (its SHA-256,
+which mode_table.json records beside each run it makes; a folder without that record is taken
+as the settings above say). Exit codes: 0 every run usable; 2 bad arguments (a
 malformed --extra, say), before any run, or, after writing the tables, a run not usable (one
 line, `mode_table.py: error: ...`); 130 / 143 interrupted (Ctrl-C / SIGTERM: the running sph-run
 gets one SIGTERM, finishes its step and saves its outputs, summary.json marked "interrupted", and
 is waited for).
 """
 import argparse
+import contextlib
+import hashlib
 import json
 import math
 import os
@@ -151,6 +154,17 @@ def scene_json():
     return _scene
 
 
+def scene_sha256():
+    """The SHA-256 of the scene file's bytes (read once)."""
+    global _sha
+    if _sha is None:
+        _sha = hashlib.sha256(pathlib.Path(args.scene).read_bytes()).hexdigest()
+    return _sha
+
+
+_sha = None
+
+
 def mismatch(out, summary, scale, sets):
     """Why the usable run in `out` (summary: its summary.json) is not the one this invocation
     would make, as the run recorded it, or None: another scene (summary.json's `scene` against
@@ -163,6 +177,12 @@ def mismatch(out, summary, scale, sets):
     name = scene.get("name")  # sph-run runs no scene without one
     if summary.get("scene") != name:
         return f"scene {summary.get('scene')!r}, expected {name!r}"
+    try:
+        kept = json.loads((out / "mode_table.json").read_text())
+    except (OSError, ValueError):
+        kept = None
+    if isinstance(kept, dict) and kept.get("scene_sha256") not in (None, scene_sha256()):
+        return "the scene file has changed since (its SHA-256 differs)"
     try:
         ran = read_json_object(out / "scene_as_run.json")
     except Unreadable as e:
@@ -207,7 +227,11 @@ def run(tag, scale, sets, rep=0):
             return s, None
         print(f"not reusing {out / 'summary.json'}: {status}; running it again", file=sys.stderr, flush=True)
     print(f"[{time.strftime('%H:%M:%S')}] {' '.join(cmd)}", file=sys.stderr, flush=True)
+    with contextlib.suppress(OSError):
+        (out / "mode_table.json").unlink(missing_ok=True)
     s, status = sph_run(cmd, out, numbers=SUMMARY_NUMBERS, keys=("scene",))
+    with contextlib.suppress(OSError):  # what --reuse checks the scene file against
+        (out / "mode_table.json").write_text(json.dumps({"scene_sha256": scene_sha256()}) + "\n")
     if status:
         print(f"run {status}: {' '.join(cmd)}\n{log_tail(out)}", file=sys.stderr, flush=True)
     return s, status
