@@ -148,6 +148,14 @@ echo '{"name": "another run"}' > "$tmp/c5/scene_as_run.json"; cp "$tmp/c5/run.js
 "$run" --resume "$tmp/c5/checkpoints/$first" --out "$tmp/c5" -q 2>"$tmp/e5"; rc=$?
 check "resume into a folder whose stats.csv has other columns exits 2 naming it, the folder's files untouched, no reserve left (got $rc)" \
   '[ $rc -eq 2 ] && grep -q "c5/stats.csv: its columns differ" "$tmp/e5" && cmp -s "$tmp/c5/stats.csv" "$tmp/c5.before" && [ ! -e "$tmp/c5/.sph-reserve" ] && grep -q "another run" "$tmp/c5/scene_as_run.json" && cmp -s "$tmp/c5/run.json" "$tmp/c5.run.json"'
+# Another run's folder (its run.json names another id) whose stats.csv has other columns: with
+# --force the resume replaces its outputs (checkpoints kept) and runs to the end.
+cp -r "$tmp/a" "$tmp/c8"; sed -i '1s/,v_mean,/,v_avg,/' "$tmp/c8/stats.csv"
+"$py" -c "import json; m = json.load(open('$tmp/c8/run.json')); m['run_id'] = '0123456789abcdef'; json.dump(m, open('$tmp/c8/run.json', 'w'))"
+"$run" --resume "$tmp/c8/checkpoints/$first" --out "$tmp/c8" -q 2>"$tmp/e8"; rc=$?
+"$run" --resume "$tmp/c8/checkpoints/$first" --out "$tmp/c8" -q --force 2>"$tmp/e8f"; rc2=$?
+check "resume into another run's folder: refused without --force, with it the outputs replaced and the run completed (got $rc, $rc2)" \
+  '[ $rc -eq 2 ] && grep -q "holds the outputs of run 0123456789abcdef" "$tmp/e8" && [ $rc2 -eq 0 ] && head -1 "$tmp/c8/stats.csv" | grep -q ",v_mean," && [ -s "$tmp/c8/summary.json" ]'
 # A stats.csv shorter than the checkpoint's (another run's folder): refused, and the 5 MiB reserve
 # the run made before reading it removed.
 cp -r "$tmp/a" "$tmp/c6"; head -n 3 "$tmp/a/stats.csv" > "$tmp/c6/stats.csv"

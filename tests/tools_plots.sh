@@ -346,6 +346,11 @@ expect(sp.read_run(r, 3) == (None, "failed (exit 3)"), f"exit 3: {sp.read_run(r,
 (r / "summary.json").write_text('{"steps": 9}\n')
 expect(sp.read_run(r, 0, numbers=("steps",)) == ({"steps": 9}, None), "a usable run")
 expect(sp.read_run(r, 0, numbers=("wall_time_s",))[1] == f'unreadable: {r}/summary.json: no "wall_time_s"', "unreadable")
+# An earlier run read with rc 0 (--reuse) that sph-run marked failed or saved from its reserve.
+(r / "summary.json").write_text('{"steps": 9, "failed": {"reason": "NaN", "t": 0.1, "step": 9}}\n')
+expect(sp.read_run(r, 0) == (None, "failed (exit 3)"), f"exit 0, marked failed: {sp.read_run(r, 0)}")
+(r / "summary.json").write_text('{"steps": 9, "output_failed": {"reason": "disk full", "t": 0.1, "step": 9}}\n')
+expect(sp.read_run(r, 0) == (None, "failed (exit 5)"), f"exit 0, marked output_failed: {sp.read_run(r, 0)}")
 # A tool (errors_as_exit_2) stopped while its child runs: the child ended and waited for, the
 # tool dead by the signal (the shell's 130 / 143), one line.
 tool = ("import os, signal, sys, threading\nimport sph_python as sp\nsp.errors_as_exit_2()\n"

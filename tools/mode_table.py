@@ -155,14 +155,8 @@ def scene_json():
 
 
 def scene_sha256():
-    """The SHA-256 of the scene file's bytes (read once)."""
-    global _sha
-    if _sha is None:
-        _sha = hashlib.sha256(pathlib.Path(args.scene).read_bytes()).hexdigest()
-    return _sha
-
-
-_sha = None
+    """The SHA-256 of the scene file's bytes as they are now."""
+    return hashlib.sha256(pathlib.Path(args.scene).read_bytes()).hexdigest()
 
 
 def mismatch(out, summary, scale, sets):
@@ -229,9 +223,11 @@ def run(tag, scale, sets, rep=0):
     print(f"[{time.strftime('%H:%M:%S')}] {' '.join(cmd)}", file=sys.stderr, flush=True)
     with contextlib.suppress(OSError):
         (out / "mode_table.json").unlink(missing_ok=True)
+    before = scene_sha256()
     s, status = sph_run(cmd, out, numbers=SUMMARY_NUMBERS, keys=("scene",))
-    with contextlib.suppress(OSError):  # what --reuse checks the scene file against
-        (out / "mode_table.json").write_text(json.dumps({"scene_sha256": scene_sha256()}) + "\n")
+    if scene_sha256() == before:  # what --reuse checks the scene file against (not if it changed meanwhile)
+        with contextlib.suppress(OSError):
+            (out / "mode_table.json").write_text(json.dumps({"scene_sha256": before}) + "\n")
     if status:
         print(f"run {status}: {' '.join(cmd)}\n{log_tail(out)}", file=sys.stderr, flush=True)
     return s, status

@@ -67,7 +67,9 @@ def run(scene, tag, sets):
         if kept == record:
             print(f"reusing {out}", file=sys.stderr)
             return out, json.loads((out / "summary.json").read_text())
-        why = "no pcisph_table.json records its command" if kept is None else "another scene or other options"
+        why = ("no pcisph_table.json records its command" if not isinstance(kept, dict) else
+               "the scene file has changed since (its SHA-256 differs)" if kept.get("command") == record["command"]
+               and kept.get("scene") == record["scene"] else "another scene or other options")
         print(f"not reusing {out / 'summary.json'}: {why}; running it again", file=sys.stderr, flush=True)
     print(f"[{time.strftime('%H:%M:%S')}] {' '.join(cmd)}", file=sys.stderr, flush=True)
     out.mkdir(parents=True, exist_ok=True)

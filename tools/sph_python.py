@@ -358,9 +358,10 @@ def read_run(out_dir, rc=0, numbers=(), keys=(), then=None):
     """What a run of sph-run into `out_dir` that exited with `rc` gave: (value, None) if it is
     usable, value being its summary.json (with a number at every dotted key of `numbers`, some
     value at every key of `keys`) or then(summary) (which reads more of the outputs and may
-    raise Unreadable); otherwise (None, status): "failed (exit N)", "interrupted (<signal> at t =
-    T s)" (a summary.json marked "interrupted": sph-run stopped by SIGINT/SIGTERM, exit 130/143,
-    or an earlier run's read with rc 0) or "unreadable: <file>: <reason>"."""
+    raise Unreadable); otherwise (None, status): "failed (exit N)" (an earlier run's summary read
+    with rc 0 that sph-run marked "failed" is exit 3, "output_failed" exit 5), "interrupted
+    (<signal> at t = T s)" (a summary.json marked "interrupted": sph-run stopped by SIGINT/SIGTERM,
+    exit 130/143, or an earlier run's read with rc 0) or "unreadable: <file>: <reason>"."""
     out_dir = pathlib.Path(out_dir)
     if rc != 0:
         if rc in (128 + signal.SIGINT, 128 + signal.SIGTERM):
@@ -374,6 +375,11 @@ def read_run(out_dir, rc=0, numbers=(), keys=(), then=None):
         status = interrupted_status(summary)
         if status:
             return None, status
+        # An earlier run's summary read with rc 0 (--reuse): one sph-run marked failed (exit 3)
+        # or saved from its reserve (exit 5) is not a usable run either.
+        for key, code in (("failed", 3), ("output_failed", 5)):
+            if key in summary:
+                return None, f"failed (exit {code})"
         return (then(summary) if then else summary), None
     except Unreadable as e:
         return None, f"unreadable: {e}"

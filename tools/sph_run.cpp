@@ -323,8 +323,8 @@ int main(int argc, char** argv) {
             spdlog::info("system graph written to {}", graph_file);
         }
         // A resume into a folder whose stats.csv is another run's is refused before the folder is
-        // taken, so that nothing in it changes.
-        if (checkpoint) {
+        // taken, so that nothing in it changes (with --force the folder's outputs are replaced).
+        if (checkpoint && !folder->replaces()) {
             try {
                 sph::Recorder::check_resume(out, *sim, checkpoint->meta.at("recorder"));
             } catch (const nlohmann::json::exception& e) {

@@ -26,47 +26,65 @@ namespace fs = std::filesystem;
 
 constexpr const char* kMarker = "run.json";
 constexpr const char* kLock = ".sph-run.lock";
-constexpr const char* kReplaced = ".sph-replaced";  ///< an earlier run's outputs on their way out
+constexpr const char* kReplaced = ".sph-replaced";  ///< prefix of the folders an earlier run's outputs leave by
 /// What sph-run writes into its folder (and so may remove again).
 constexpr const char* kOutputs[] = {"scene_as_run.json", "stats.csv", "summary.json", "frames", "frames.pvd", "boundary",
                                     "boundary_moving.pvd", "probes", "checkpoints", "surface", ".sph-reserve"};
 
-std::string list_outputs(const fs::path& dir) {
+/// The outputs found in dir, comma-separated; `written_only`: not counting checkpoints/ and the
+/// reserve (what a resume would append to or list).
+std::string list_outputs(const fs::path& dir, bool written_only = false) {
     std::string found;
     for (const char* o : kOutputs) {
+        if (written_only && (std::strcmp(o, "checkpoints") == 0 || std::strcmp(o, ".sph-reserve") == 0)) continue;
         std::error_code ec;
         if (fs::exists(dir / o, ec)) found += (found.empty() ? "" : ", ") + std::string(o);
     }
     return found;
 }
 
-/// Removes the outputs all or nothing: each is first renamed into the hidden folder kReplaced (a
-/// rename happens whole or not at all); when one cannot be (a folder without write permission, a
-/// mount point), those already moved are put back and OutputError names it, the earlier run's
-/// outputs left as they were. Only then is the hidden folder deleted; what cannot be deleted stays
-/// hidden there, out of the new run's way, and the next replacement tries again.
-void remove_outputs(const fs::path& dir, bool keep_checkpoints) {
-    const fs::path trash = dir / kReplaced;
+/// Removes the outputs all or nothing: each is first renamed into a hidden folder of this run's,
+/// `.sph-replaced-<run id>` (a rename happens whole or not at all); when one cannot be (a folder
+/// without write permission, a mount point), those already moved are put back and OutputError
+/// names it and says which, if any, could not be put back. Only then is the hidden folder deleted;
+/// what cannot be deleted stays there, out of the new run's way, and the next replacement tries
+/// again to delete every such folder. Where the hidden folder cannot be made because the disk is
+/// full (ENOSPC, EDQUOT), the outputs are deleted one by one instead, which frees the room.
+void remove_outputs(const fs::path& dir, const std::string& run_id, bool keep_checkpoints) {
     std::error_code ec;
-    fs::remove_all(trash, ec);
+    for (const auto& e : fs::directory_iterator(dir, ec))  // earlier replacements' leftovers
+        if (e.path().filename().native().starts_with(kReplaced)) fs::remove_all(e.path(), ec);
+    const fs::path trash = dir / (std::string(kReplaced) + "-" + (run_id.empty() ? std::string("run") : run_id));
     ec.clear();
     fs::create_directory(trash, ec);
-    if (ec) throw OutputError(trash.string() + ": cannot create it to replace the earlier run's outputs (" + ec.message() + ")");
+    const bool no_room = ec == std::errc::no_space_on_device || ec.value() == EDQUOT;
+    if (ec && !no_room)
+        throw OutputError(trash.string() + ": cannot create it to replace the earlier run's outputs (" + ec.message() + ")");
     std::vector<const char*> moved;
     for (const char* o : kOutputs) {
         if (keep_checkpoints && std::strcmp(o, "checkpoints") == 0) continue;
         if (!fs::exists(fs::symlink_status(dir / o, ec))) continue;
+        if (no_room) {
+            fs::remove_all(dir / o, ec);
+            if (ec) throw OutputError((dir / o).string() + ": cannot remove the earlier run's output (" + ec.message() + ")");
+            continue;
+        }
         fs::rename(dir / o, trash / o, ec);
         if (ec) {
-            const std::string why = ec.message();
-            for (auto it = moved.rbegin(); it != moved.rend(); ++it) fs::rename(trash / *it, dir / *it, ec);
-            fs::remove(trash, ec);
-            throw OutputError((dir / o).string() + ": cannot remove the earlier run's output (" + why +
-                              "); none of its outputs was removed");
+            std::string why = ec.message(), stranded;
+            for (auto it = moved.rbegin(); it != moved.rend(); ++it) {
+                fs::rename(trash / *it, dir / *it, ec);
+                if (ec) stranded += (stranded.empty() ? "" : ", ") + std::string(*it);
+            }
+            if (stranded.empty()) fs::remove(trash, ec);
+            throw OutputError((dir / o).string() + ": cannot remove the earlier run's output (" + why + "); " +
+                              (stranded.empty() ? std::string("none of its outputs was removed")
+                                                : "the others are in place but " + stranded + ", which could not be put back, in " +
+                                                      trash.string()));
         }
         moved.push_back(o);
     }
-    fs::remove_all(trash, ec);
+    if (!no_room) fs::remove_all(trash, ec);
 }
 
 nlohmann::json read_marker(const fs::path& dir) {
@@ -151,7 +169,7 @@ RunFolder::RunFolder(fs::path dir, std::string run_id, std::string scene, bool r
                 m_note = "replaced the outputs (" + outputs + ") of " +
                          (marker.is_null() ? std::string("an unmarked run") : describe(marker)) + " in " + m_dir.string();
             }
-        } else if (marker.is_null() && !outputs.empty()) {
+        } else if (marker.is_null() && !m_run_id.empty() && !list_outputs(m_dir, true).empty()) {
             // Outputs no run claims: continuing the checkpoint's run here would append to (and
             // list in frames.pvd) another run's files.
             if (!force)
@@ -187,7 +205,7 @@ RunFolder::RunFolder(fs::path dir, std::string run_id, std::string scene, bool r
 
 void RunFolder::take() {
     if (m_taken) return;
-    if (m_replace != Replace::None) remove_outputs(m_dir, m_replace == Replace::AllButCheckpoints);
+    if (m_replace != Replace::None) remove_outputs(m_dir, m_run_id, m_replace == Replace::AllButCheckpoints);
     m_marker["started_unix_s"] =
         std::chrono::duration_cast<std::chrono::seconds>(std::chrono::system_clock::now().time_since_epoch()).count();
     write_file_atomic(m_dir / kMarker, m_marker.dump(2) + "\n");

@@ -9,9 +9,10 @@
 /// (stats.csv, summary.json, frames/, boundary/, the .pvd files, probes/, checkpoints/) when it
 /// takes the folder, after its set-up succeeded (take()): a run whose set-up fails leaves the
 /// earlier outputs as they were; the removal is all or nothing (an output that cannot be removed
-/// leaves every one in place). Outputs without a marker (another program's, or an older
+/// leaves every one in place, but on a full disk, where they are deleted one by one). Outputs without a marker (another program's, or an older
 /// sph-run's) are replaced only with `force`. A resumed run must find its own run's marker, or
-/// a folder without outputs (or `force`).
+/// a folder without outputs but checkpoints (or `force`; a checkpoint without a run id, from
+/// before run ids, resumes into an unmarked folder as it always did).
 #include <filesystem>
 #include <string>
 
@@ -42,6 +43,9 @@ public:
     void keep() { m_keep = true; }
     const std::filesystem::path& dir() const { return m_dir; }
     const std::string& run_id() const { return m_run_id; }
+    /// @brief Whether take() removes (removed) an earlier run's outputs (a fresh run's, or with
+    /// `force` another's): a resume then checks nothing of theirs.
+    bool replaces() const { return m_replace != Replace::None; }
     /// @brief What take() does (did) with earlier outputs, for the log ("" when nothing).
     const std::string& note() const { return m_note; }
 
