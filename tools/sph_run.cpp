@@ -324,25 +324,25 @@ int main(int argc, char** argv) {
         }
         // A resume into a folder whose stats.csv is another run's is refused before the folder is
         // taken, so that nothing in it changes (with --force the folder's outputs are replaced).
-        if (checkpoint && !folder->replaces()) {
+        // The checkpoint's recorder state read by `use`; a state without the keys sph-run writes
+        // names the checkpoint.
+        const auto with_recorder_state = [&](const auto& use) {
             try {
-                sph::Recorder::check_resume(out, *sim, checkpoint->meta.at("recorder"));
+                use(checkpoint->meta.at("recorder"));
             } catch (const nlohmann::json::exception& e) {
                 throw sph::CheckpointError(resume_file + ": meta key 'recorder' is not what sph-run writes (" +
                                            e.what() + ")");
             }
-        }
+        };
+        if (checkpoint && !folder->replaces())
+            with_recorder_state([&](const nlohmann::json& st) { sph::Recorder::check_resume(out, *sim, st); });
         // Set-up succeeded: only now are an earlier run's outputs replaced (a run that fails
         // before this point leaves them as they were).
         folder->take();
         if (!folder->note().empty()) spdlog::info("{}", folder->note());
         if (checkpoint) {
-            try {
-                recorder = std::make_unique<sph::Recorder>(out, *sim, checkpoint->meta.at("recorder"));
-            } catch (const nlohmann::json::exception& e) {
-                throw sph::CheckpointError(resume_file + ": meta key 'recorder' is not what sph-run writes (" +
-                                           e.what() + ")");
-            }
+            with_recorder_state(
+                [&](const nlohmann::json& st) { recorder = std::make_unique<sph::Recorder>(out, *sim, st); });
         } else {
             recorder = std::make_unique<sph::Recorder>(out, *sim);
             recorder->begin(*sim);
