@@ -286,6 +286,27 @@ rc=0; wait "$study" || rc=$?
          ls -a "$out/t/01_global"; cat "$out/tlog"; tail -3 "$out/t/01_global/run.log"; exit 1; }
 echo "sph-study Ctrl-C to the process group, real sph-run: ok"
 
+# A study killed outright (SIGKILL: nothing of the tool runs) still ends its run: the kernel sends
+# the sph-run it started one SIGTERM as the tool dies (PR_SET_PDEATHSIG), and it saves its summary
+# marked "interrupted" as from the tool's own SIGTERM. Before, it ran on to its end (30 s of
+# simulated time here, minutes) in its own session.
+"$tools/sph-study" scenes/martin_moyce.json --scale 0.296296 --end 30 --no-default-modes --config global \
+    --out "$out/k" > "$out/klog" 2>&1 &
+study=$!
+for _ in $(seq 600); do [ -e "$out/k/01_global/.sph-reserve" ] && break; sleep 0.1; done
+sleep 0.5
+run_pid=$(pgrep -f -- "--out $out/k/01_global" || true)
+kill -KILL "$study"; wait "$study" 2>/dev/null || true
+for _ in $(seq 300); do [ -n "$run_pid" ] && kill -0 "$run_pid" 2>/dev/null || break; sleep 0.1; done
+if [ -z "$run_pid" ] || kill -0 "$run_pid" 2>/dev/null \
+    || ! grep -q '"by": "SIGTERM"' "$out/k/01_global/summary.json" || ! [ -s "$out/k/01_global/stats.csv" ]; then
+    echo "SIGKILL to a study: its sph-run (pid '$run_pid') should have stopped within 30 s, saving a summary marked" \
+         "interrupted by SIGTERM"
+    [ -n "$run_pid" ] && kill -TERM "$run_pid" 2>/dev/null
+    ls -a "$out/k/01_global"; tail -3 "$out/k/01_global/run.log"; exit 1
+fi
+echo "sph-study killed by SIGKILL, real sph-run: ok"
+
 # The global run fails and the individual one is stopped by SIGTERM (summary.json "interrupted",
 # exit 143): the constant configuration, whose step is global's smallest, is skipped (no silent
 # run at the scene's step), a row saying why; the interrupted run is a marked row, not a result;

@@ -15,6 +15,7 @@ it never outlives its tool), `sph_run` and `read_run` (a run is usable, or "fail
 its relative files made absolute), `md_cell`/`md_status_row` and `exit_if_unusable`."""
 import contextlib
 import csv
+import ctypes
 import importlib.util
 import io
 import json
@@ -290,16 +291,32 @@ def end_child(proc, grace=10.0):
             raise
 
 
+PR_SET_PDEATHSIG = 1  # linux/prctl.h
+
+
+def _term_with_parent(libc, parent):
+    """The child's side of run_child, between fork and exec: ask Linux for one SIGTERM when the
+    tool dies (prctl PR_SET_PDEATHSIG; it survives exec), which covers a tool killed by SIGKILL
+    and a signal that lands before run_child's `try`. A tool already gone by then (its pid no
+    longer the parent's) means no run: exit at once."""
+    if libc.prctl(PR_SET_PDEATHSIG, int(signal.SIGTERM), 0, 0, 0) != 0:
+        raise OSError(ctypes.get_errno(), "prctl(PR_SET_PDEATHSIG)")
+    if os.getppid() != parent:
+        os._exit(1)
+
+
 def run_child(cmd, log, echo=None):
     """Run `cmd`, its stdout and stderr into the file `log` (each line also given to `echo`,
     if any, as it comes); returns its exit code. The child runs in a session (and so a process
     group) of its own: a terminal's Ctrl-C, sent to the terminal's foreground process group,
     reaches the tool only. On any exception while it runs (Ctrl-C, SIGTERM, SIGHUP, a bug) the
     child is ended and waited for (end_child: one SIGTERM) and what it wrote meanwhile goes to
-    `log` (and `echo`) before the exception goes on."""
+    `log` (and `echo`) before the exception goes on. If the tool dies without that (SIGKILL), the
+    child gets one SIGTERM from the kernel (_term_with_parent) and saves as it would from ours."""
+    parent, libc = os.getpid(), ctypes.CDLL(None, use_errno=True)  # loaded here, not after the fork
     with open(log, "w") as f:
         proc = subprocess.Popen(cmd, stdout=subprocess.PIPE if echo else f, stderr=subprocess.STDOUT, text=True,
-                                start_new_session=True)
+                                start_new_session=True, preexec_fn=lambda: _term_with_parent(libc, parent))
         try:
             if echo:
                 for line in proc.stdout:
