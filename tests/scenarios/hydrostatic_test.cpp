@@ -79,8 +79,9 @@ std::vector<std::string> modes() {
 class HydrostaticTank : public ::testing::TestWithParam<std::string> {};
 
 /// The tank in `mode`; with `continuity` the density is integrated with delta-SPH diffusion
-/// (fluid.density: continuity, delta 0.1), and the pressure noise at rest is held as well.
-void check_tank(const std::string& mode, bool continuity);
+/// (fluid.density: continuity, delta 0.1). `noise`, if given, receives the pressure noise at rest
+/// at y = 0.3, 0.2 and 0.1 m (Pa, the 1 kHz samples' standard deviation, mean of the five lines).
+void check_tank(const std::string& mode, bool continuity, std::vector<double>* noise = nullptr);
 
 TEST_P(HydrostaticTank, PressureMatchesRhoGDepth) { check_tank(GetParam(), false); }
 
@@ -91,12 +92,33 @@ TEST_P(HydrostaticTank, PressureMatchesRhoGDepth) { check_tank(GetParam(), false
 // itself, `individual` read -3.24 / -2.61 / -2.10 % (surface 0.4049 m): the floor clipped the
 // lower half of its resting noise and lifted the column (density_kernels.hpp,
 // continuity_density_floor).
+//
+// The noise at rest is held no worse than the summation density's. In `global` and `binned` it is
+// 0.5-7.3 Pa (2026-12-07, AVX-512), held below 14 Pa, the summation's lowest (14-23 Pa at 50 Hz,
+// 2026-12-03). In `individual` the noise comes from its stepping, not the density, and continuity
+// lowers it only a little: 188 / 193 / 195 Pa against the summation run's 213 / 226 / 213 Pa on
+// this host (ratio of the means 0.885), and 186-194 against 200-240 before. A fixed 200 Pa, the
+// bound until then, sat inside that scatter (2-6 % margin), so `individual` is held against a
+// summation run of its own in the same test: the mean over the three depths below it ("no worse";
+// measured 0.885, an 11 % margin where the fixed bound left 2 %).
 class HydrostaticTankContinuity : public ::testing::TestWithParam<std::string> {};
-TEST_P(HydrostaticTankContinuity, PressureMatchesRhoGDepthWithLessNoise) { check_tank(GetParam(), true); }
+TEST_P(HydrostaticTankContinuity, PressureMatchesRhoGDepthWithLessNoise) {
+    std::vector<double> noise;
+    check_tank(GetParam(), true, &noise);
+    if (GetParam() == "individual" && noise.size() == 3) {
+        std::vector<double> summation;
+        check_tank(GetParam(), false, &summation);
+        ASSERT_EQ(summation.size(), 3u);
+        const double c = (noise[0] + noise[1] + noise[2]) / 3, s = (summation[0] + summation[1] + summation[2]) / 3;
+        std::printf("hydrostatic [individual]: pressure noise at rest, mean of the three depths: continuity %.1f Pa, "
+                    "summation %.1f Pa (ratio %.3f)\n", c, s, c / s);
+        EXPECT_LT(c, s) << "continuity's noise at rest against the summation density's, individual";
+    }
+}
 INSTANTIATE_TEST_SUITE_P(PerStepMode, HydrostaticTankContinuity, ::testing::Values("global", "individual", "binned"),
                          [](const auto& info) { return info.param; });
 
-void check_tank(const std::string& mode, bool continuity) {
+void check_tank(const std::string& mode, bool continuity, std::vector<double>* noise) {
     std::vector<std::pair<std::string, nlohmann::json>> overrides{{"/simulation/stepping/mode", mode},
                                                                    {"/simulation/frame_rate", 0}};
     if (continuity) overrides.push_back({"/fluid/density", "continuity"});
@@ -147,11 +169,11 @@ void check_tank(const std::string& mode, bool continuity) {
         }
         std::printf("hydrostatic [%s%s]: y = %s m pressure noise (standard deviation at 1 kHz) %.1f Pa\n", mode.c_str(),
                     continuity ? ", continuity" : "", y, sd);
-        // Noise at rest no worse with the continuity density: below the summation density's
-        // (measured 2026-12-03 at 50 Hz, the same probes: global 14-23 Pa, individual 200-240 Pa;
-        // continuity global 4-10 Pa, binned 4-8 Pa, individual 167-209 Pa).
-        if (continuity) {
-            EXPECT_LT(sd, mode == "individual" ? 200.0 : 14.0) << "y = " << y << " m";
+        if (noise) noise->push_back(sd);
+        // Noise at rest no worse with the continuity density (HydrostaticTankContinuity above;
+        // `individual` there, against a summation run).
+        if (continuity && mode != "individual") {
+            EXPECT_LT(sd, 14.0) << "y = " << y << " m";
         }
         const double bound = std::string(y) == "0.3" ? 0.025 : 0.02;  // see the tolerances above
         const double tolerance = mode == "individual" ? bound * expect + 3 * p.standard_error : bound * expect;
