@@ -31,6 +31,9 @@ stage "1/4 Release build and the whole suite"
 cmake -S . -B build-test -DCMAKE_BUILD_TYPE=Release -DCMAKE_UNITY_BUILD=ON -DSPH_BUILD_TESTS=ON -DSPH_BUILD_BENCH=ON >/dev/null
 cmake --build build-test -j"$jobs"
 ctest --test-dir build-test --output-on-failure -j"$jobs" --timeout 1200
+# Every test's output, passing ones too (the figures they print beside their bounds), kept as
+# build-test/stage1-tests.log: the ctest calls below (--show-only) rewrite LastTest.log.
+cp build-test/Testing/Temporary/LastTest.log build-test/stage1-tests.log
 [ "${SPH_TEST_SANITIZERS:-1}" = "0" ] && exit 0
 
 # Sanitizer builds: -O1 (fast enough to run, much faster to compile than -O2), -g1 (line tables:
