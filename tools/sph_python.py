@@ -313,10 +313,13 @@ def run_child(cmd, log, echo=None):
     child is ended and waited for (end_child: one SIGTERM) and what it wrote meanwhile goes to
     `log` (and `echo`) before the exception goes on. If the tool dies without that (SIGKILL), the
     child gets one SIGTERM from the kernel (_term_with_parent) and saves as it would from ours."""
-    parent, libc = os.getpid(), ctypes.CDLL(None, use_errno=True)  # loaded here, not after the fork
+    preexec = None
+    if sys.platform.startswith("linux"):  # prctl is Linux's; elsewhere a killed tool's run goes on
+        parent, libc = os.getpid(), ctypes.CDLL(None, use_errno=True)  # loaded here, not after the fork
+        preexec = lambda: _term_with_parent(libc, parent)  # noqa: E731
     with open(log, "w") as f:
         proc = subprocess.Popen(cmd, stdout=subprocess.PIPE if echo else f, stderr=subprocess.STDOUT, text=True,
-                                start_new_session=True, preexec_fn=lambda: _term_with_parent(libc, parent))
+                                start_new_session=True, preexec_fn=preexec)
         try:
             if echo:
                 for line in proc.stdout:
