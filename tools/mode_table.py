@@ -40,7 +40,6 @@ is waited for).
 """
 import argparse
 import contextlib
-import hashlib
 import json
 import math
 import os
@@ -49,8 +48,8 @@ import platform
 import statistics
 import sys
 import time
-from sph_python import Unreadable, csv_text, errors_as_exit_2, exit_if_unusable, log_tail, md_cell, md_status_row, \
-    positive_list, read_json_object, read_run, require, sph_run, write_atomic  # noqa: E402 (tools/ is the script's folder)
+from sph_python import Unreadable, csv_text, errors_as_exit_2, exit_if_unusable, file_sha256, log_tail, md_cell, \
+    md_status_row, positive_list, read_json_object, read_run, require, sph_run, write_atomic  # noqa: E402 (tools/ is the script's folder)
 
 errors_as_exit_2()
 
@@ -156,7 +155,7 @@ def scene_json():
 
 def scene_sha256():
     """The SHA-256 of the scene file's bytes as they are now."""
-    return hashlib.sha256(pathlib.Path(args.scene).read_bytes()).hexdigest()
+    return file_sha256(args.scene)
 
 
 def mismatch(out, summary, scale, sets):

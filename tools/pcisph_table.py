@@ -17,12 +17,11 @@ step and saves its outputs) and ends the tool by that signal.
 """
 import argparse
 import csv
-import hashlib
 import json
 import pathlib
 import sys
 import time
-from sph_python import errors_as_exit_2, log_tail, run_child  # noqa: E402 (tools/ is the script's folder)
+from sph_python import errors_as_exit_2, file_sha256, log_tail, run_child  # noqa: E402 (tools/ is the script's folder)
 
 errors_as_exit_2()
 
@@ -58,7 +57,7 @@ def run(scene, tag, sets):
     for s in args.set + sets:
         cmd += ["--set", s]
     record = {"scene": str(pathlib.Path(scene).resolve()),
-              "scene_sha256": hashlib.sha256(pathlib.Path(scene).read_bytes()).hexdigest(), "command": cmd[2:]}
+              "scene_sha256": file_sha256(scene), "command": cmd[2:]}
     if args.reuse and (out / "summary.json").is_file():
         try:
             kept = json.loads((out / "pcisph_table.json").read_text())

@@ -16,6 +16,7 @@ its relative files made absolute), `md_cell`/`md_status_row` and `exit_if_unusab
 import contextlib
 import csv
 import ctypes
+import hashlib
 import importlib.util
 import io
 import json
@@ -289,6 +290,12 @@ def end_child(proc, grace=10.0):
         proc.wait()
         if sys.exc_info()[0] is not subprocess.TimeoutExpired:
             raise
+
+
+def file_sha256(path):
+    """The SHA-256 of a file's bytes as they are now (hex): what the tools record of a scene file
+    beside the runs they make of it, so that --reuse can tell an edited scene from the same one."""
+    return hashlib.sha256(pathlib.Path(path).read_bytes()).hexdigest()
 
 
 PR_SET_PDEATHSIG = 1  # linux/prctl.h
