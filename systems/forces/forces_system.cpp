@@ -34,6 +34,7 @@
 #include "systems/forces/forces_kernels.hpp"
 #include "systems/forces/forces_simd.hpp"
 #include "systems/timestep/global_dt_system.hpp"
+#include "systems/timestep/step_bound_simd.hpp"
 
 namespace sph {
 
@@ -144,8 +145,8 @@ void ForcesSystem::run(Context& ctx) {
         acc[i] = a + g;
         if constexpr (Drho) drho[i] = div;
     };
-    // The vectorised loop (simulation.simd); the scalar lambda above is the reference it is
-    // tested against.
+    // The vectorised loops (simulation.simd; step_bounds_simd for line 13, bit for bit
+    // raw_step's); the scalar lambdas above are the reference they are tested against.
     const bool simd = ph.simd;
     ForcePairArgs vec;
     if (simd) {
@@ -194,18 +195,21 @@ void ForcesSystem::run(Context& ctx) {
     auto t_last = ctx.write(fluid(comp::t_last));
     const Tick now = ctx.clock().t_ticks;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, active.size(), 256), [&](const auto& r) {
-            if (simd) force_rows_simd(vec, active.data(), r.begin(), r.end());
+            if (simd) {  // a_i, drho_i/dt and Delta t_i^raw of the whole range
+                force_rows_simd(vec, active.data(), r.begin(), r.end());
+                step_bounds_simd(bound, vec.v, vec.acc, x.size(), active.data(), r.begin(), r.end(), dt_raw.data());
+            }
             for (std::size_t k = r.begin(); k < r.end(); ++k) {
                 const Index i = active[k];
-                if (!simd) {  // (the vectorised loop wrote a_i and drho_i/dt for the whole range)
+                if (!simd) {
                     if (m_continuity)
                         m_corrected ? evaluate.template operator()<false, true>(i)
                                     : evaluate.template operator()<false, false>(i);
                     else
                         m_corrected ? evaluate.template operator()<true, true>(i)
                                     : evaluate.template operator()<true, false>(i);
+                    raw_step(i);
                 }
-                raw_step(i);
                 t_last[i] = now;
             }
         });
