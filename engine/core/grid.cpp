@@ -440,7 +440,10 @@ void build_compact(const UniformGrid& grid, std::span<const Vec3> grid_positions
                    const QuerySubset& subset, NeighbourLists& lists, bool simd) {
     const std::size_t n = query_positions.size();
     constexpr std::size_t B = NeighbourLists::kBlock;
-    const bool every = subset.all;
+    // A subset of n rows is every row (it is ascending and unique): built as every list, with
+    // `queried` kept as a subset build keeps it (binned stepping's steps with every row due).
+    const bool full_subset = !subset.all && subset.indices.size() == n;
+    const bool every = subset.all || full_subset;
     if (lists.capacity != 0 || lists.end.size() != n) {  // from the slab layout or another size
         lists.capacity = 0;
         std::vector<Index>().swap(lists.indices);
@@ -451,7 +454,9 @@ void build_compact(const UniformGrid& grid, std::span<const Vec3> grid_positions
     lists.blocks.resize((n + B - 1) / B);
     // The last subset's blocks hold the only other non-empty lists: empty them (this build
     // rewrites the blocks it touches).
-    if (!every)
+    if (!every && lists.queried.size() == n)  // the last build was every row's
+        std::fill(lists.end.begin(), lists.end.end(), Index(0));
+    else if (!every)
         for (std::size_t k = 0; k < lists.queried.size(); ++k) {
             const std::size_t b = lists.queried[k] / B;
             if (k > 0 && lists.queried[k - 1] / B == b) continue;
@@ -520,7 +525,7 @@ void build_compact(const UniformGrid& grid, std::span<const Vec3> grid_positions
             }
         }
     });
-    if (every)
+    if (subset.all)
         lists.queried.clear();
     else
         lists.queried.assign(rows.begin(), rows.end());

@@ -355,7 +355,8 @@ TEST(NeighbourSearch, CompactListsPermuteRoundTripAndBecomeASlab) {
 
 // Binned stepping's layout (QuerySubset::keep_others = false): the subset's lists are built
 // compact and equal brute force; every other list is empty, including those of the previous
-// subset; a permutation carries the subset along; a full build afterwards is whole again.
+// subset (also after a subset of every row); a permutation carries the subset along; a full build
+// afterwards is whole again.
 TEST(NeighbourSearch, CompactSubsetListsHoldTheSubsetOnly) {
     for (const bool simd : {false, true}) {
         SCOPED_TRACE(simd ? "vectorised filter" : "scalar filter");
@@ -404,6 +405,12 @@ TEST(NeighbourSearch, CompactSubsetListsHoldTheSubsetOnly) {
         // The next subset build empties the carried rows that it does not query.
         build_neighbour_lists(grid, moved, moved, h, true, QuerySubset{first, false, false}, lists, simd);
         check(moved, first);
+        // A subset of every row (built as every list) and then a smaller one: every row's list,
+        // then the smaller subset's alone.
+        build_neighbour_lists(grid, moved, moved, h, true, QuerySubset{all, false, false}, lists, simd);
+        check(moved, all);
+        build_neighbour_lists(grid, moved, moved, h, true, QuerySubset{second, false, false}, lists, simd);
+        check(moved, second);
         build_neighbour_lists(grid, moved, moved, h, true, QuerySubset{}, lists, simd);
         EXPECT_TRUE(lists.queried.empty());
         expect_equal_to_brute(grid, moved, moved, h, true, lists, all);
