@@ -177,9 +177,14 @@ double front_by_neighbours(const World& w, const UniformGrid& grid, const Vec3d&
     std::iota(order.begin(), order.end(), Index(0));
     std::vector<Real> proj(x.size());
     for (std::size_t i = 0; i < x.size(); ++i) proj[i] = x[i].dot(d);
-    std::sort(order.begin(), order.end(), [&](Index a, Index b) { return proj[a] > proj[b] || (proj[a] == proj[b] && a < b); });
+    // The rows in order of decreasing projection (ties by index), taken lazily from a heap: the
+    // front is usually among the first few, so O(n) for the heap instead of a sort's O(n log n).
+    const auto later = [&](Index a, Index b) { return proj[b] > proj[a] || (proj[b] == proj[a] && b < a); };
+    std::make_heap(order.begin(), order.end(), later);
     const Real h2 = w.physics.h * w.physics.h;
-    for (const Index i : order) {
+    for (auto end = order.end(); end != order.begin(); --end) {
+        std::pop_heap(order.begin(), end, later);
+        const Index i = *(end - 1);
         int count = 0;
         grid.for_each_candidate(x[i], w.fluid.store.get(comp::position), [&](Index j, const Vec3& xj) {
             if (j != i && (x[i] - xj).squaredNorm() < h2) ++count;

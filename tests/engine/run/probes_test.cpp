@@ -5,7 +5,11 @@
 // exact for a linear field), plus sampling rates, CSV output and scene-file errors.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <fstream>
+#include <limits>
+#include <numeric>
+#include <random>
 #include <sstream>
 
 #include "engine/data/components.hpp"
@@ -107,6 +111,42 @@ TEST(Probes, FrontByNeighboursIgnoresALoneDroplet) {
     const auto g = grid_of(w);
     EXPECT_NEAR(front_by_neighbours(w, g, {1, 0, 0}, 4) + w.physics.particle_radius, 0.2, 1e-6);
     EXPECT_NEAR(front_by_neighbours(w, g, {1, 0, 0}, 0), 0.35, 1e-6);
+}
+
+// Against brute force on a scattered block: every particle jittered, a few thrown ahead along a
+// slanted direction, k from 0 to 30; the reference sorts every particle by its projection (ties
+// by index) and counts neighbours over all pairs. Exact: the same float projections.
+TEST(Probes, FrontByNeighboursEqualsBruteForce) {
+    auto sim = block_at_rest();
+    World& w = sim->world();
+    auto x = w.fluid.store.get(comp::position);
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> jitter(-0.004f, 0.004f);
+    for (auto& p : x) p += Vec3(jitter(rng), jitter(rng), jitter(rng));
+    for (int k = 0; k < 12; ++k) x[std::size_t(37 * k + 5)] = Vec3(0.21f + 0.012f * float(k), 0.25f, 0.1f);
+    x[3] = x[4];  // a tie in every projection
+    const auto g = grid_of(w);
+    const Real h2 = w.physics.h * w.physics.h;
+    for (const Vec3d& dir : {Vec3d(1, 0, 0), Vec3d(0.8, 0.6, 0), Vec3d(-0.6, 0, 0.8)}) {
+        const Vec3 d = dir.cast<Real>();
+        std::vector<Index> order(x.size());
+        std::iota(order.begin(), order.end(), Index(0));
+        std::sort(order.begin(), order.end(), [&](Index a, Index b) {
+            return x[a].dot(d) > x[b].dot(d) || (x[a].dot(d) == x[b].dot(d) && a < b);
+        });
+        for (const int k : {0, 1, 4, 12, 30}) {
+            double want = -std::numeric_limits<double>::infinity();
+            for (const Index i : order) {
+                int count = 0;
+                for (Index j = 0; j < x.size(); ++j) count += j != i && (x[i] - x[j]).squaredNorm() < h2;
+                if (count >= k) {
+                    want = double(x[i].dot(d));
+                    break;
+                }
+            }
+            EXPECT_EQ(front_by_neighbours(w, g, dir, k), want) << "k = " << k << ", direction " << dir.transpose();
+        }
+    }
 }
 
 // The summary's front (recorder.hpp, front_x) is the same front by neighbours along +x, counted from
