@@ -251,7 +251,7 @@ InteriorDensityError interior_density_error(const World& w) {
                 bool near_wall = false;
                 if (walls)
                     w.boundary_grid.for_each_candidate(x[i], w.boundary.store.get(comp::position), [&](Index, const Vec3& xbj) {
-                        near_wall = near_wall || (x[i] - xbj).squaredNorm() < h2;
+                        if (!near_wall) near_wall = (x[i] - xbj).squaredNorm() < h2;  // the rest unread
                     });
                 if (near_wall) continue;
                 const double e = std::max(0.0, double(rho[i]) / rho0 - 1.0);
