@@ -62,9 +62,12 @@ Average mean_after(const ProbeSeries& s, const std::string& col, double t0) {
     return {mean, std::sqrt(var / n)};
 }
 
+/// Every WCSPH stepping mode but `individual`, whose summation tank HydrostaticTankContinuity's
+/// `individual` case runs (with every check of PressureMatchesRhoGDepth) to compare its noise.
 std::vector<std::string> modes() {
     std::vector<std::string> out;
     for (const auto& m : stepping_mode_names()) {
+        if (m == "individual") continue;
         try {
             load_scene(SPH_SOURCE_DIR "/scenes/hydrostatic_tank.json", {{"/simulation/stepping/mode", m}});
             out.push_back(m);
