@@ -102,9 +102,7 @@ void ForcesSystem::run(Context& ctx) {
     // He Alg. 2 line 13, computed exactly as the global step of eq. 6-8 (so that equal steps
     // reproduce `global`), from the particle's velocity and its new acceleration.
     const StepBound bound(stepping, h, c, ph.kinematic_viscosity);
-    auto raw_step = [&](Index i) {
-        dt_raw[i] = bound(std::sqrt(double(v[i].squaredNorm())), std::sqrt(double(acc[i].squaredNorm())));
-    };
+    auto raw_step = [&](Index i) { dt_raw[i] = bound.of(v[i], acc[i]); };
     // Drho: drho_i/dt is wanted (individual stepping with the summation density).
     auto evaluate = [&]<bool Drho, bool Corrected>(Index i) {
         const Vec3 xi = x[i], vi = v[i];

@@ -41,6 +41,11 @@ struct StepBound {
         if (acoustic) dt = std::min(dt, lambda_ch / (c_s + v));
         return dt;
     }
+    /// The bound of a particle from its velocity and acceleration: |v| and |a| in double from
+    /// the particle-precision squared norms (He Alg. 2 line 13).
+    double of(const Vec3& v, const Vec3& a) const {
+        return (*this)(std::sqrt(double(v.squaredNorm())), std::sqrt(double(a.squaredNorm())));
+    }
 };
 
 class GlobalDtSystem final : public System {

@@ -75,8 +75,7 @@ void StepBounds(const StepBound& b, const Real* v, const Real* a, std::size_t n,
     }
     for (; k < end; ++k) {  // the tail: StepBound itself
         const std::size_t i = rows ? rows[k] : k;
-        const Vec3 vi(v[3 * i], v[3 * i + 1], v[3 * i + 2]), ai(a[3 * i], a[3 * i + 1], a[3 * i + 2]);
-        dt_raw[i] = b(std::sqrt(double(vi.squaredNorm())), std::sqrt(double(ai.squaredNorm())));
+        dt_raw[i] = b.of(Vec3(v[3 * i], v[3 * i + 1], v[3 * i + 2]), Vec3(a[3 * i], a[3 * i + 1], a[3 * i + 2]));
     }
 }
 #else
