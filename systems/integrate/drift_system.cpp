@@ -6,9 +6,11 @@
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <atomic>
+#include <functional>
 #include <numeric>
 
 #include "engine/data/components.hpp"
@@ -211,20 +213,25 @@ void DriftRowsSystem::run(Context& ctx) {
     rows.clear();
     const std::size_t n = v.size();
     const auto& set = ctx.read(res::active_set);
+    // Every row, in one streaming pass (clearing the claim marks when `marked`).
+    auto stream = [&](bool velocity_only, bool marked) {
+        rows.resize(n);
+        std::iota(rows.begin(), rows.end(), Index(0));
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, kGrain), [&](const auto& r) {
+            if (velocity_only)
+                for (std::size_t i = r.begin(); i < r.end(); ++i) drift_velocity(i);
+            else
+                for (std::size_t i = r.begin(); i < r.end(); ++i) drift(i);
+            if (marked) std::fill(m_mark.begin() + std::ptrdiff_t(r.begin()), m_mark.begin() + std::ptrdiff_t(r.end()), 0);
+        });
+    };
     // Every row evaluated with the summation density: the density system sums rho and p of
     // each anew, so only the velocity is read before that.
     const bool velocity_only = m_summed && set.size() == n;
-    if (m_all || velocity_only || 128 * set.size() >= n) {
-        // Every row, in one streaming pass: from n/128 active rows on, their lists reach a large
-        // share of the rows (up to 30 or 40 each where the active rows are scattered), and
-        // marking and drifting those at random costs more than streaming through all.
-        rows.resize(n);
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, kGrain), [&](const auto& r) {
-            for (std::size_t i = r.begin(); i < r.end(); ++i) {
-                rows[i] = Index(i);
-                velocity_only ? drift_velocity(i) : drift(i);
-            }
-        });
+    if (m_all || velocity_only || kStreamRows * set.size() >= n) {
+        // From n / kStreamRows active rows on, their lists reach most rows even where the active
+        // rows lie together, and marking them costs more than streaming through all.
+        stream(velocity_only, false);
         return;
     }
     // The active rows and their fluid neighbours, each once and ascending.
@@ -244,8 +251,10 @@ void DriftRowsSystem::run(Context& ctx) {
         }
         return;
     }
-    // More: mark (a relaxed byte store: no read-modify-write), then one scan of the marks (a
-    // byte a row, cheaper than sorting the claims once they are thousands) collects them in order.
+    // More: mark (a relaxed byte store: no read-modify-write), count the marks (a byte a row),
+    // then drift the marked rows in one scan of the marks (a byte a row, cheaper than sorting
+    // the claims once they are thousands), or, when they are kStreamMarked of the rows or more
+    // (scattered active rows: up to 30 or 40 neighbours each), every row streamed.
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, set.size(), 256), [&](const auto& r) {
         for (std::size_t k = r.begin(); k < r.end(); ++k) {
             std::atomic_ref<std::uint8_t>(m_mark[set[k]]).store(1, std::memory_order_relaxed);
@@ -254,6 +263,17 @@ void DriftRowsSystem::run(Context& ctx) {
     });
     constexpr std::size_t kChunk = 16384;
     const std::size_t chunks = (n + kChunk - 1) / kChunk;
+    const std::size_t marked = tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, n, kChunk), std::size_t(0),
+        [&](const auto& r, std::size_t sum) {
+            for (std::size_t i = r.begin(); i < r.end(); ++i) sum += m_mark[i];
+            return sum;
+        },
+        std::plus<>());
+    if (double(marked) >= kStreamMarked * double(n)) {
+        stream(false, true);
+        return;
+    }
     std::vector<std::vector<Index>> parts(chunks);
     tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t c) {
         auto& out = parts[c];

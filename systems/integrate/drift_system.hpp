@@ -76,6 +76,12 @@ public:
     /// @param summed the density system sums rho (and p) of every active row: when every row is
     /// active, only the velocity is drifted.
     explicit DriftRowsSystem(bool all = false, bool summed = false) : m_all(all), m_summed(summed) {}
+    /// From n / kStreamRows active rows on, every row is streamed without marking.
+    static constexpr std::size_t kStreamRows = 16;
+    /// Below that, the rows read are marked and counted; when they are this share of the rows
+    /// or more, every row is streamed (a marked row drifted in the scan costs about twice one
+    /// streamed: docs/results/benchmarks.md).
+    static constexpr double kStreamMarked = 0.5;
     std::string name() const override { return "drift_rows"; }
     Access access() const override;
     void register_components(World& w) override;

@@ -13,6 +13,7 @@
 #include "engine/core/errors.hpp"
 #include "engine/data/components.hpp"
 #include "systems/active/select_active_system.hpp"
+#include "systems/integrate/drift_system.hpp"
 #include "systems/methods/recipes.hpp"
 #include "systems/methods/wcsph.hpp"
 #include "systems/neighbours/fluid_grid_system.hpp"
@@ -345,8 +346,9 @@ TEST(BinnedStepping, SlabWakesSleepingPool) {
 // synchronised at the end. `dam_break` without the acoustic condition (sleeping rows from the
 // first steps) for 300 steps, with He et al.'s summation (the active rows' lists drifted) and
 // with the defaults (continuity, extrapolated walls: every row drifted); the step mix is
-// asserted so that both of DriftRowsSystem's paths at this size (<= 64 active rows, and n/128
-// or more: every row) ran; Drift.RowsAreTheActiveRowsAndTheirNeighbours covers the third. 300
+// asserted so that DriftRowsSystem's paths at this size ran (<= 64 active rows; under n/16: marked,
+// then the marked rows drifted or, when they are half the rows, every row; n/16 or more: every
+// row); Drift.RowsAreTheActiveRowsAndTheirNeighbours covers each against brute force. 300
 // steps (150 under the sanitizers, test::kSanitized).
 TEST(BinnedStepping, LazyDriftEqualsDriftingEveryRowEveryStep) {
     const int steps = test::kSanitized ? 150 : 300;
@@ -356,19 +358,20 @@ TEST(BinnedStepping, LazyDriftEqualsDriftingEveryRowEveryStep) {
         auto eager = make_simulation(s);
         lazy->set_synchronise_observers(false);
         const std::size_t n = lazy->world().fluid.size();
-        int paths[3] = {0, 0, 0};  // <= 64, below n/128, the rest
+        int paths[3] = {0, 0, 0};  // <= 64, marked (below n/16), the rest
         for (int k = 0; k < steps; ++k) {
             lazy->step();
             eager->step();
             ASSERT_TRUE(same_step(lazy->world(), eager->world(), k));
             const std::size_t m = lazy->world().active_set.size();
-            ++paths[m <= 64 ? 0 : 128 * m < n ? 1 : 2];
+            ++paths[m <= 64 ? 0 : DriftRowsSystem::kStreamRows * m < n ? 1 : 2];
         }
         expect_same_columns(*lazy, *eager);
-        std::printf("%s: steps by active rows: <= 64: %d, < n/128: %d, more: %d\n", defaults ? "defaults" : "summation",
+        std::printf("%s: steps by active rows: <= 64: %d, < n/16: %d, more: %d\n", defaults ? "defaults" : "summation",
                     paths[0], paths[1], paths[2]);
         if (!defaults) {
             EXPECT_GT(paths[0], 0);
+            EXPECT_GT(paths[1], 0);
             EXPECT_GT(paths[2], 0);
         }
     }

@@ -8,8 +8,9 @@
 // * DriftRowsSystem writes velocity, density and pressure of exactly the active rows and their
 //   fluid neighbours (lists built by FluidNeighbourSystem, which NeighbourSearch tests against
 //   brute force), lists them ascending in res::drifted, and leaves every other row's bits as
-//   they were, at 5 and 80 active rows (one task; marks and a scan); from n/128 active rows on
-//   (n/10 here) and with `all`, every row;
+//   they were, at 5 and 80 active rows (one task; marks and a scan) and n/40 rows lying together
+//   (marks and a scan); every row from n/16 active rows on (n/10 here), when the marked rows are
+//   half the rows or more (n/30 scattered rows), and with `all`;
 // * drift_fluid (World::synchronise) brings every behind row's four columns to the clock.
 // Tolerance: 2e-6 relative to the value's scale (float arithmetic of a few roundings); positions
 // within 1e-9 + 8e-8 m (a few ulps of 0.4 m), where a wrong term, e.g. v_last for v in line 21,
@@ -141,20 +142,33 @@ TEST(Drift, RowsAreTheActiveRowsAndTheirNeighbours) {
     Fixture f;
     const std::size_t n = f.w.fluid.size();
     std::mt19937 rng(3);
-    ASSERT_GT(n, 128u * 80);  // 80 active rows take the marking path
-    for (const std::size_t m : {std::size_t(5), std::size_t(80), n / 10}) {
+    ASSERT_GT(n, DriftRowsSystem::kStreamRows * (n / 40));  // n/40 active rows take the marking path
+    // Scattered sets of 5 (one task), 80 and n/30 (marked; n/30 reach over half the rows, so
+    // they are streamed after the count), n/10 (streamed without marking); then n/40 rows lying
+    // together (marked; their neighbours are under half the rows: the scan).
+    struct Case {
+        std::size_t m;
+        bool together;
+    };
+    DriftRowsSystem sys;  // one system through the cases: each finds the last one's claim marks cleared
+    for (const Case c : {Case{5, false}, Case{80, false}, Case{n / 30, false}, Case{n / 10, false}, Case{n / 40, true}}) {
+        const std::size_t m = c.m;
         f.reset_outputs();
         std::vector<Index> all(n);
         for (std::size_t i = 0; i < n; ++i) all[i] = Index(i);
-        std::shuffle(all.begin(), all.end(), rng);
+        if (!c.together) std::shuffle(all.begin(), all.end(), rng);
         f.w.active_set.assign(all.begin(), all.begin() + std::ptrdiff_t(m));
         std::sort(f.w.active_set.begin(), f.w.active_set.end());
         std::set<Index> want(f.w.active_set.begin(), f.w.active_set.end());
         for (Index i : f.w.active_set)
             for (Index j : f.w.fluid_neighbours.of(i)) want.insert(j);
-        if (128 * m >= n)  // from n/128 active rows on: every row, streamed
+        const bool streamed = DriftRowsSystem::kStreamRows * m >= n ||
+                              (m > 64 && double(want.size()) >= DriftRowsSystem::kStreamMarked * double(n));
+        std::printf("%zu active rows%s: %zu read, %s\n", m, c.together ? " together" : "", want.size(),
+                    streamed ? "every row streamed" : "marked");
+        EXPECT_EQ(streamed, m == n / 10 || (m == n / 30 && !c.together)) << "the case does not test the path meant";
+        if (streamed)
             for (std::size_t i = 0; i < n; ++i) want.insert(Index(i));
-        DriftRowsSystem sys;
         run_system(sys, f.w);
         EXPECT_EQ(f.w.drifted, std::vector<Index>(want.begin(), want.end())) << m << " active rows";
         f.expect_rows(f.w.drifted);
