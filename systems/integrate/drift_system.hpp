@@ -79,8 +79,8 @@ public:
     /// From n / kStreamRows active rows on, every row is streamed without marking.
     static constexpr std::size_t kStreamRows = 16;
     /// Below that, the rows read are marked and counted; when they are this share of the rows
-    /// or more, every row is streamed (a marked row drifted in the scan costs about twice one
-    /// streamed: docs/results/benchmarks.md).
+    /// or more, every row is streamed (the scan's rows are scattered: past half of them, a
+    /// stream that writes them all in order costs no more).
     static constexpr double kStreamMarked = 0.5;
     std::string name() const override { return "drift_rows"; }
     Access access() const override;
