@@ -80,6 +80,15 @@ public:
         (add(m_writes, key_of(handles)), ...);
         return *this;
     }
+    /// @brief Writes that store exact copies of columns the engine checked when they were written
+    /// (a base state saved from the current state): ordered like any write, but the finiteness
+    /// trace (Simulation::trace_non_finite) does not read them again.
+    template <class... H>
+    Access& copies(const H&... handles) {
+        write(handles...);
+        (add(m_copies, key_of(handles)), ...);
+        return *this;
+    }
     /// @brief Reads (r) and writes (w) only when `when` holds: optional parts of a system.
     template <class... H>
     Access& read_if(bool when, const H&... handles) {
@@ -116,6 +125,8 @@ public:
     }
     bool may_read(std::string_view key) const { return contains(m_reads, key) || contains(m_writes, key); }
     bool may_write(std::string_view key) const { return contains(m_writes, key); }
+    /// @brief Whether every write of this key is a copy (copies()).
+    bool is_copy(std::string_view key) const { return contains(m_copies, key); }
     /// @brief The counters among the writes (their names without "counter.").
     std::vector<std::string> counters() const;
 
@@ -126,7 +137,7 @@ private:
     static bool contains(const std::vector<std::string>& v, std::string_view key) {
         return std::find(v.begin(), v.end(), key) != v.end();
     }
-    std::vector<std::string> m_reads, m_writes;
+    std::vector<std::string> m_reads, m_writes, m_copies;
     std::vector<SetId> m_resizes;
     std::string m_rows;
 };

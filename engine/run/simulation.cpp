@@ -176,7 +176,7 @@ void Simulation::trace_non_finite(std::size_t system) {
         if (system < f.system) f = Fault{system, particle, col, position};
     };
     for (const auto& wr : access.writes()) {
-        if (wr.rfind("fluid.", 0) != 0) continue;
+        if (wr.rfind("fluid.", 0) != 0 || access.is_copy(wr)) continue;
         const std::string col = wr.substr(6);
         if (!store.has(col)) continue;
         const std::type_info& t = store.type_of(col);

@@ -24,7 +24,7 @@ Access AsyncIntegrationSystem::access() const {
     if (m_active_only)
         return Access()
             .read(res::active_set, fluid(comp::position), fluid(comp::velocity), fluid(comp::t_last))
-            .write(fluid(comp::position_last), fluid(comp::velocity_last))
+            .copies(fluid(comp::position_last), fluid(comp::velocity_last))  // of x and v, checked when written
             .rows(res::active_set);
     return Access()
         .read(fluid(comp::acceleration), fluid(comp::active), fluid(comp::t_last), fluid(comp::drho_dt),

@@ -98,6 +98,29 @@ TEST(Access, KeysOfTypedHandles) {
     EXPECT_FALSE(a.may_write("fluid.position"));
 }
 
+// copies(): a write like any other (ordered, may_write), marked so that the finiteness trace
+// skips it; merged with a part that computes the same column it is no longer a copy.
+TEST(Access, CopiesAreWritesTheTraceSkips) {
+    const Access a = Access().read(fluid(comp::position)).copies(fluid(comp::position_last)).write(fluid(comp::velocity));
+    EXPECT_TRUE(a.may_write("fluid.position_last"));
+    EXPECT_TRUE(a.is_copy("fluid.position_last"));
+    EXPECT_FALSE(a.is_copy("fluid.velocity"));
+    EXPECT_FALSE(a.is_copy("fluid.position"));
+    // Ordered against a reader of the copy like any write.
+    EXPECT_EQ(derive_edges({a, Access().read(fluid(comp::position_last))}), (std::vector<Edge>{{0, 1}}));
+    Access b = a;
+    b.merge(Access().write(fluid(comp::position_last)));
+    EXPECT_FALSE(b.is_copy("fluid.position_last")) << "computed in one part: checked";
+    Access c = a;
+    c.merge(Access().read(fluid(comp::position_last)).copies(fluid(comp::velocity_last)));
+    EXPECT_TRUE(c.is_copy("fluid.position_last"));
+    EXPECT_TRUE(c.is_copy("fluid.velocity_last"));
+    Access d = Access().write(fluid(comp::velocity_last));
+    d.merge(c);
+    EXPECT_FALSE(d.is_copy("fluid.velocity_last"));
+    EXPECT_TRUE(d.is_copy("fluid.position_last"));
+}
+
 // Running the flow graph respects every edge and runs every node once per run.
 TEST(SystemGraph, RunsInDependencyOrder) {
     std::vector<std::string> log;
