@@ -79,8 +79,8 @@ public:
     /// From n / kStreamRows active rows on, every row is streamed without marking.
     static constexpr std::size_t kStreamRows = 16;
     /// Below that, the rows read are marked and counted; when they are this share of the rows
-    /// or more, every row is streamed (the scan's rows are scattered: past half of them, a
-    /// stream that writes them all in order costs no more).
+    /// or more, every row is streamed (at 1 % of 10^6 rows due, scattered, the scan already
+    /// costs what the stream costs: BM_Binned_drift_rows, docs/results/he_table1.md).
     static constexpr double kStreamMarked = 0.5;
     std::string name() const override { return "drift_rows"; }
     Access access() const override;
