@@ -49,9 +49,17 @@ std::size_t UniformGrid::table_bytes() const {
 }
 
 std::size_t UniformGrid::bytes() const {
-    return (m_chunk_start.capacity() + m_wide.capacity() + m_sorted_index.capacity()) * sizeof(Index) +
+    return (m_chunk_start.capacity() + m_wide.capacity() + m_sorted_index.capacity() + m_cell_of.capacity()) * sizeof(Index) +
            m_offset.capacity() * sizeof(std::uint16_t) + (m_sx.capacity() + m_sy.capacity() + m_sz.capacity()) * sizeof(Real) +
            m_near.capacity();
+}
+
+bool UniformGrid::in_built_cells(std::span<const Vec3> positions, std::size_t begin, std::size_t end) const {
+    if (!m_keep_cells || m_drift > 0 || positions.size() != m_count || m_cell_of.size() != m_count || end > m_count)
+        return false;
+    for (std::size_t i = begin; i < end; ++i)
+        if (Index(cell_index(cell_coords(positions[i]))) != m_cell_of[i]) return false;
+    return true;
 }
 
 void UniformGrid::set_drift(Real drift) {
@@ -125,8 +133,15 @@ void UniformGrid::build(std::span<const Vec3> positions) {
     const std::size_t n = positions.size();
     const std::size_t cells = cell_count();
     m_count = n;
-    // Scratch, uninitialised (zeroing it cost a pass over 4 bytes a particle), freed on return.
-    const auto cell_of = std::make_unique_for_overwrite<Index[]>(n);
+    ++m_builds;
+    // Scratch, uninitialised (zeroing it cost a pass over 4 bytes a particle), freed on return;
+    // with keep_cells the member array instead.
+    std::unique_ptr<Index[]> scratch;
+    if (m_keep_cells)
+        m_cell_of.resize(n);
+    else
+        scratch = std::make_unique_for_overwrite<Index[]>(n);
+    Index* const cell_of = m_keep_cells ? m_cell_of.data() : scratch.get();
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const auto& r) {
         for (std::size_t i = r.begin(); i < r.end(); ++i) cell_of[i] = Index(cell_index(cell_coords(positions[i])));
     });

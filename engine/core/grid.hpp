@@ -54,6 +54,20 @@ public:
     /// is answered by one lookup. Off by default: a set queried against itself is never empty.
     /// Costs one byte a cell (and two more while a build computes them).
     void mark_empty_neighbourhoods(bool on) { m_mark_empty = on; }
+    /// @brief With `on`, every build also keeps each particle's cell (4 bytes a particle), so
+    /// that in_built_cells can tell whether a later move left the grid as it is.
+    void keep_cells(bool on) {
+        m_keep_cells = on;
+        if (!on) std::vector<Index>().swap(m_cell_of);
+    }
+    /// @brief Whether the particles [begin, end) of the set the grid was built from still lie in
+    /// the cells they were sorted into: when every particle that moved since the build does,
+    /// a build from the current positions gives this grid, bit for bit (the slots follow the
+    /// cells, and within a cell the index order). False without keep_cells, after a set_drift,
+    /// or when the set's size changed.
+    bool in_built_cells(std::span<const Vec3> positions, std::size_t begin, std::size_t end) const;
+    /// @brief The builds since construction (for the tests).
+    std::uint64_t builds() const { return m_builds; }
     /// @brief Whether no particle lies in the 27 cells around cell c (so no query there has a
     /// candidate); false when the grid does not mark them or carries a drift.
     bool empty_around(std::int64_t c) const { return m_drift == 0 && !m_near.empty() && !m_near[std::size_t(c)]; }
@@ -191,6 +205,9 @@ private:
     std::vector<Real> m_sx, m_sy, m_sz;   ///< with keep_coordinates: particle_count() + kPadding each
     bool m_mark_empty = false;
     std::vector<std::uint8_t> m_near;     ///< with mark_empty_neighbourhoods: 1 where the 27 cells hold a particle
+    bool m_keep_cells = false;
+    std::vector<Index> m_cell_of;         ///< with keep_cells: each particle's cell at the build
+    std::uint64_t m_builds = 0;
 };
 
 /// @brief The candidates of one cell's 27-cell neighbourhood gathered from the grid's particle

@@ -266,10 +266,12 @@ void build_grids(World& w, const std::vector<Vec3d>& bx) {
     }
     w.boundary_grid = UniformGrid(bbox, ph.h, "boundary grid (the domain and every boundary)");
     w.boundary_grid.mark_empty_neighbourhoods(true);  // most fluid queries meet no wall
+    // A moving body's particles change cell every few dozen steps: BoundaryMotionSystem
+    // rebuilds the grid only then (UniformGrid::in_built_cells).
+    w.boundary_grid.keep_cells(!w.moving_bodies.empty());
     if (!bx.empty()) {
         // Static boundary particles never move: store them in z-order once, then index the
-        // grid. Moving bodies keep their ranges (the permutation is the identity there); the
-        // boundary motion system rebuilds the grid every step.
+        // grid. Moving bodies keep their ranges (the permutation is the identity there).
         bs.permute(boundary_order(w, bs.get(comp::position)));
         w.boundary_grid.build(bs.get(comp::position));
     }

@@ -55,8 +55,14 @@ void BoundaryMotionSystem::run(Context& ctx) {
         body.bounds = Aabb{box.first, box.second};
         body.speed = speed_bound(motion, t);
     }
-    // The grid indexes every boundary particle; rebuilt whole (O(N_b) per step, see header).
-    ctx.write(res::boundary_grid).build(x);
+    // The grid indexes every boundary particle: rebuilt whole (O(N_b + cells)) on a step where a
+    // body's particle crossed into another cell, else left as it is, which is what a build
+    // would give (UniformGrid::in_built_cells).
+    UniformGrid& grid = ctx.write(res::boundary_grid);
+    bool same = true;
+    for (const MovingBody& body : ctx.read(res::moving_bodies))
+        same = same && grid.in_built_cells(x, body.begin, body.end);
+    if (!same) grid.build(x);
 }
 
 }  // namespace sph

@@ -4,11 +4,14 @@
 /// with their rigid body and carry its velocity). At the start of each step every moving
 /// body's particles are placed at x0 + d(t) with velocity v(t) (engine/motion.hpp, t = the
 /// step's start time), its bounds and speed bound are updated for the wake rule of individual
-/// stepping, and the boundary grid is rebuilt. Boundary particles never integrate.
+/// stepping, and the boundary grid is rebuilt when a body's particle has crossed into another
+/// cell since its last build (otherwise a build would give the same grid). Boundary particles
+/// never integrate.
 ///
-/// Cost per step: O(moving-body particles) for the positions, plus the grid rebuild over
-/// *all* boundary particles, O(N_b) work with an O(N_b log N_b) sort of a nearly sorted key
-/// array (UniformGrid::build). Only in the recipe when the scene has a moving boundary.
+/// Cost per step: O(moving-body particles) for the positions and the cell test, plus, on the
+/// steps where a particle changed cell, the grid's counting sort over *all* boundary particles
+/// and its cells, O(N_b + cells) (UniformGrid::build). Only in the recipe when the scene has a
+/// moving boundary.
 #include <vector>
 
 #include "engine/data/scene.hpp"

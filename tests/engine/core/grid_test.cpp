@@ -526,6 +526,50 @@ TEST(NeighbourSearch, DriftedGridEqualsAFreshGridInOrder) {
 // A box far too large for its cell size (the 171 x 40 x 40 m dam break of the robustness
 // issue: 2^31 cells and more) is refused with the cell count and the memory, before anything
 // is allocated; one just below the limit's order of magnitude is built.
+// UniformGrid::in_built_cells: true exactly when every particle of the range lies in the cell
+// it was sorted into, and then the grid equals a build from the moved positions; false without
+// keep_cells, with a drift, or when the set's size changed.
+TEST(NeighbourSearch, InBuiltCellsTellsWhenABuildWouldChangeNothing) {
+    const Real h = 0.1f;
+    std::vector<Vec3> pts = cloud(3000, h, 4);
+    const Aabb box{Vec3d(-1.5, -1.5, -1.5), Vec3d(1, 1, 1)};
+    UniformGrid grid(box, h);
+    grid.mark_empty_neighbourhoods(true);
+    grid.keep_cells(true);
+    grid.build(pts);
+    // Moved inside their cells: the particles 1000..1999 towards their cell's centre by a tenth.
+    std::vector<Vec3> moved = pts;
+    for (std::size_t i = 1000; i < 2000; ++i) {
+        const Eigen::Vector3i c = grid.cell_coords(pts[i]);
+        const Vec3 centre = grid.origin() + (c.cast<Real>() + Vec3::Constant(0.5f)) * h;
+        moved[i] = pts[i] + Real(0.1) * (centre - pts[i]);
+        ASSERT_EQ(grid.cell_of(moved[i]), grid.cell_of(pts[i]));
+    }
+    EXPECT_TRUE(grid.in_built_cells(moved, 1000, 2000));
+    UniformGrid fresh(box, h);
+    fresh.mark_empty_neighbourhoods(true);
+    fresh.build(moved);
+    EXPECT_TRUE(std::equal(fresh.sorted_index().begin(), fresh.sorted_index().end(), grid.sorted_index().begin()));
+    for (std::int64_t c = 0; c < std::int64_t(fresh.cell_count()); ++c) {
+        ASSERT_EQ(fresh.cell_start(c), grid.cell_start(c)) << "cell " << c;
+        ASSERT_EQ(fresh.empty_around(c), grid.empty_around(c)) << "cell " << c;
+    }
+    // One particle of the range across a cell face: false (a build would move it to another slot).
+    moved[1500] = pts[1500] + Vec3(h, 0, 0);
+    EXPECT_FALSE(grid.in_built_cells(moved, 1000, 2000));
+    EXPECT_TRUE(grid.in_built_cells(moved, 1501, 2000));  // the range without it
+    // Without keep_cells, with a drift, or another set size: false.
+    std::vector<Vec3> fewer(pts.begin(), pts.end() - 1);
+    EXPECT_FALSE(grid.in_built_cells(fewer, 0, 10));
+    UniformGrid plain(box, h);
+    plain.build(pts);
+    EXPECT_FALSE(plain.in_built_cells(pts, 0, pts.size()));
+    grid.build(pts);
+    EXPECT_TRUE(grid.in_built_cells(pts, 0, pts.size()));
+    grid.set_drift(0.01f);
+    EXPECT_FALSE(grid.in_built_cells(pts, 0, pts.size()));
+}
+
 TEST(UniformGridLimits, TooManyCellsIsRefusedWithCountAndMemory) {
     try {
         UniformGrid grid(Aabb{Vec3d(0, 0, 0), Vec3d(171, 40, 40)}, 0.04f, "fluid grid");
