@@ -127,8 +127,25 @@ BENCHMARK(BM_WallPressure)->ArgsProduct({{10'000, 100'000, 1'000'000}, {1000, 50
 static void BM_BoundaryCollision(benchmark::State& state) { bench_system(state, [](const Scene& s) { return BoundaryCollisionSystem(s.boundaries, false); }); }
 BENCHMARK(BM_BoundaryCollision)->Apply(sizes);
 
-static void BM_BoundaryMotion(benchmark::State& state) { bench_system(state, [](const Scene& s) { return BoundaryMotionSystem(s.boundaries); }, true); }
-BENCHMARK(BM_BoundaryMotion)->Apply(sizes);
+/// BM_BoundaryMotion/<particles>/<moved>: moved 0 runs at one time, so no body particle changes
+/// cell and the grid is kept (most steps); moved 1 alternates the clock between t = 0 and a
+/// quarter period (the body 1 cm apart), so every call rebuilds the grid.
+static void BM_BoundaryMotion(benchmark::State& state) {
+    auto sim = tank(std::size_t(state.range(0)), true);
+    World& w = sim->world();
+    BoundaryMotionSystem system(w.scene.boundaries);
+    const bool moved = state.range(1) != 0;
+    const std::uint64_t builds = w.boundary_grid.builds();
+    std::int64_t k = 0;
+    for (auto _ : state) {
+        if (moved) w.clock.t = (k++ % 2) * 0.25;
+        run_system(system, w);
+        benchmark::ClobberMemory();
+    }
+    counters(state, w, double(w.boundary.size()));
+    state.counters["rebuilt"] = double(w.boundary_grid.builds() - builds) / double(state.iterations());
+}
+BENCHMARK(BM_BoundaryMotion)->ArgsProduct({{10'000, 100'000, 1'000'000}, {0, 1}})->Unit(benchmark::kMillisecond)->UseRealTime();
 
 static void BM_StepStats(benchmark::State& state) { bench_system(state, [](const Scene&) { return StepStatsSystem(false); }); }
 BENCHMARK(BM_StepStats)->Apply(sizes);
