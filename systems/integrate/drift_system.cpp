@@ -216,8 +216,8 @@ void DriftRowsSystem::run(Context& ctx) {
     // Every row, in one streaming pass (clearing the claim marks when `marked`).
     auto stream = [&](bool velocity_only, bool marked) {
         rows.resize(n);
-        std::iota(rows.begin(), rows.end(), Index(0));
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, kGrain), [&](const auto& r) {
+            std::iota(rows.begin() + std::ptrdiff_t(r.begin()), rows.begin() + std::ptrdiff_t(r.end()), Index(r.begin()));
             if (velocity_only)
                 for (std::size_t i = r.begin(); i < r.end(); ++i) drift_velocity(i);
             else
