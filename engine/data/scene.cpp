@@ -188,6 +188,10 @@ DensityForm density_form(const Scene& scene) {
     return scene.simulation.method == Method::Wcsph ? DensityForm::Continuity : DensityForm::Summation;
 }
 
+double stable_lambda_c(const Scene& scene) {
+    return density_form(scene) == DensityForm::Continuity ? 0.7 : 0.9;
+}
+
 Aabb default_domain(const Scene& scene, double h) {
     Aabb box{Vec3d::Constant(std::numeric_limits<double>::max()), Vec3d::Constant(std::numeric_limits<double>::lowest())};
     auto grow = [&](const Vec3d& p) {

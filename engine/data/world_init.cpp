@@ -279,7 +279,21 @@ void build_grids(World& w, const std::vector<Vec3d>& bx) {
 
 }  // namespace
 
+/// A WCSPH step at the acoustic bound above stable_lambda_c rings (scene.hpp): said once, at the start.
+void warn_unstable_lambda_c(const Scene& scene) {
+    const SteppingParams& st = scene.simulation.stepping;
+    if (scene.simulation.method != Method::Wcsph || !st.acoustic || st.mode == SteppingMode::Constant) return;
+    const double edge = stable_lambda_c(scene);
+    if (st.lambda_c <= edge) return;
+    spdlog::warn("simulation.stepping.lambda_c = {:g} is above {:g}, the largest at which a {} density's pressure "
+                 "field stays quiet when particles step at the acoustic bound (measured: a resting tank's kinetic "
+                 "energy grows 5-40x above it); particles that reach the bound will ring. Keep lambda_c at or below "
+                 "{:g} (docs/methods.md, \"The acoustic condition\")",
+                 st.lambda_c, edge, to_string(density_form(scene)), edge);
+}
+
 void initialise_world(World& w, const Scene& scene) {
+    warn_unstable_lambda_c(scene);
     derive_constants(w, scene);
     const double r = scene.particle_radius();
     FluidSample fluid = sample_fluid(scene, r);

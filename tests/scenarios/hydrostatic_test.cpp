@@ -192,3 +192,42 @@ void check_tank(const std::string& mode, bool continuity, std::vector<double>* n
 
 INSTANTIATE_TEST_SUITE_P(EveryMode, HydrostaticTank, ::testing::ValuesIn(modes()),
                          [](const auto& info) { return info.param; });
+
+// The stable edge of the acoustic coefficient (stable_lambda_c, engine/data/scene.hpp): the tank at
+// rest in `global` with lambda_v = lambda_f = 1, so that the acoustic bound lambda_c h / (c_s + |v|)
+// alone sets every step (c_s dt / h = lambda_c at rest), for 1 s. The whole fluid's kinetic energy
+// (the scene's `fluid` probe, mean over 0.3-1 s, after the start's settling) at the edge and 0.1
+// above it, each against the same tank at the default lambda_c 0.4. Measured 2026-12-07 (AVX-512):
+// summation 0.049 J at 0.4, 0.046 J at 0.9 (0.94x), 0.77 J at 0.95 and 1.8 J at 1.0 (37x);
+// continuity 0.0021 J at 0.4, 0.0022 J at 0.7 (1.04x), 0.011 J at 0.8 (5.2x), 0.17 J at 0.9, and
+// at 1.0 the time step collapses at t = 0.07 s. Held: at the edge at most 1.5x the default's
+// (it is the default's settling, 0.94-1.04x), above it at least 3x (5.2x and 37x measured): a
+// change that moved the edge by 0.1 either way fails one of the two.
+TEST(HydrostaticTankAcoustic, RingsAboveTheStableLambdaC) {
+    for (const char* density : {"summation", "continuity"}) {
+        const auto kinetic = [&](double lambda_c) {
+            const Scene scene = load_scene(SPH_SOURCE_DIR "/scenes/hydrostatic_tank.json",
+                                           {{"/simulation/stepping/mode", "global"},
+                                            {"/simulation/stepping/lambda_v", 1.0},
+                                            {"/simulation/stepping/lambda_f", 1.0},
+                                            {"/simulation/stepping/lambda_c", lambda_c},
+                                            {"/simulation/end_time", 1.0},
+                                            {"/simulation/frame_rate", 0},
+                                            {"/fluid/density", density}});
+            auto sim = make_simulation(scene);
+            ProbeSet probes(scene.probes);
+            probes.sample_due(sim->world());
+            sim->run_until(scene.simulation.end_time, [&](const Simulation& s) { probes.sample_due(s.world()); });
+            return mean_after(probes.series("fluid"), "kinetic", 0.3).mean;
+        };
+        const Scene probe = load_scene(SPH_SOURCE_DIR "/scenes/hydrostatic_tank.json", {{"/fluid/density", density}});
+        const double edge = stable_lambda_c(probe);
+        const double up = std::min(1.0, edge + 0.1);  // the loader accepts lambda_c up to 1
+        const double at_default = kinetic(0.4), at_edge = kinetic(edge), above = kinetic(up);
+        std::printf("acoustic edge [%s]: kinetic energy 0.3-1 s at lambda_c 0.4 %.4g J, at %.2g (the edge) %.4g J "
+                    "(%.2fx), at %.2g %.4g J (%.1fx)\n",
+                    density, at_default, edge, at_edge, at_edge / at_default, up, above, above / at_default);
+        EXPECT_LE(at_edge, 1.5 * at_default) << density << ": the tank rings at the stable edge " << edge;
+        EXPECT_GE(above, 3.0 * at_default) << density << ": the tank is quiet 0.1 above the edge " << edge;
+    }
+}
