@@ -40,6 +40,20 @@ a = [[r[c] for c in cols] for r in csv.DictReader(open(\"$tmp/as_run/stats.csv\"
 b = [[r[c] for c in cols] for r in csv.DictReader(open(\"$tmp/again/stats.csv\"))]
 sys.exit(0 if len(a) > 20 and a == b else 1)"'
 
+# 2c. binned reduces its statistics over the due rows: stats.csv's whole_fluid marks the steps with
+# every row due (and only those), and summary.json's max_avg_density_error is the largest
+# rho_err_avg of those steps (the acoustic condition off: sleeping rows from the first steps).
+"$run" "$src/scenes/dam_break.json" --end 0.03 --mode binned --set simulation.stepping.acoustic=false --no-frames --out "$tmp/whole" -q; rc=$?
+check "binned: whole_fluid is 1 exactly on the steps with every row due, max_avg_density_error over them (exit $rc)" '[ $rc -eq 0 ] && python3 -c "
+import csv, json, sys
+s = json.load(open(\"$tmp/whole/summary.json\"))
+rows = list(csv.DictReader(open(\"$tmp/whole/stats.csv\")))
+flags = [int(r[\"whole_fluid\"]) == (int(r[\"active\"]) == s[\"fluid_particles\"]) for r in rows]
+whole = [float(r[\"rho_err_avg\"]) for r in rows if r[\"whole_fluid\"] == \"1\"]
+part = len(rows) - len(whole)
+ok = all(flags) and whole and part > 0 and abs(s[\"max_avg_density_error\"] - max(whole)) <= 1e-8 * max(whole)
+sys.exit(0 if ok else 1)"'
+
 # A scene given by a relative path from elsewhere: its probes' experiment files (relative to the
 # scene's folder) are written as absolute paths that exist.
 (cd "$src/scenes/.." && "$run" scenes/martin_moyce.json --end 0.005 --no-frames --out "$tmp/mm" -q); rc=$?

@@ -113,6 +113,11 @@ struct StepStats {
     /// A diagnostic (stats.csv's v_mean): no system reads it, and checkpoints do not hold it.
     double v_mean = 0;
     Index a_max_particle = 0;
+    /// True when the figures above are over every fluid row (every mode but `binned`, and
+    /// `binned`'s steps with every row due); false on `binned`'s steps that reduce over the due
+    /// rows only, whose average is not the fluid's (stats.csv's `whole_fluid`; summary.json's
+    /// max_avg_density_error is taken over the true steps).
+    bool whole_fluid = true;
 };
 
 /// @brief A request to discard the last steps (res::rollback). A system that finds the step

@@ -85,6 +85,7 @@ void StepStatsSystem::run(Context& ctx) {
     s.v_mean = n ? r.v_sum / double(n) : 0.0;
     s.a_max = std::sqrt(r.a2_max);
     s.a_max_particle = r.a_arg;
+    s.whole_fluid = rows == nullptr;
     ctx.write(counter::updated) = m_individual ? ctx.read(counter::active) : n;
     if (!m_individual) ctx.write(counter::active) = n;
     ctx.write(counter::neighbour_pairs) = r.pairs;
