@@ -277,8 +277,6 @@ void build_grids(World& w, const std::vector<Vec3d>& bx) {
     }
 }
 
-}  // namespace
-
 /// A WCSPH step at the acoustic bound above stable_lambda_c rings (scene.hpp): said once, at the start.
 void warn_unstable_lambda_c(const Scene& scene) {
     const SteppingParams& st = scene.simulation.stepping;
@@ -291,6 +289,8 @@ void warn_unstable_lambda_c(const Scene& scene) {
                  "{:g} (docs/methods.md, \"The acoustic condition\")",
                  st.lambda_c, edge, to_string(density_form(scene)), edge);
 }
+
+}  // namespace
 
 void initialise_world(World& w, const Scene& scene) {
     warn_unstable_lambda_c(scene);
