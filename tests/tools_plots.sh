@@ -230,6 +230,39 @@ for b in bad: print("  expected:", b)
 sys.exit(1 if bad else 0)
 EOF2
 check "mode_table.csv/.md: the unreadable run marked, the other three rows complete" '[ $rc -eq 0 ]'
+# The accuracy and efficiency columns against a computation of their own: each row's RMS
+# deviation from the constant run of the front probe and of the fluid probe's kinetic energy
+# (numpy's interp of the row's series at the constant run's sample times), zero for the constant
+# row itself; evaluations per particle = steps x average active fraction; S x f = the wall
+# speed-up times it (the CSV's own figures, to 1e-9).
+"$py" - "$tmp/mt" <<'EOF2'; rc=$?
+import csv, json, math, pathlib, sys
+import numpy as np
+d = pathlib.Path(sys.argv[1])
+rows = {r["mode"]: r for r in csv.DictReader(open(d / "mode_table.csv"))}
+def series(mode, probe, column):
+    c = np.genfromtxt(d / f"scale0.296296_{mode}" / "probes" / f"{probe}.csv", delimiter=",", names=True)
+    return c["t"], c[column]
+bad = []
+for m in ("constant", "global", "lv"):
+    r, s = rows[m], json.load(open(d / f"scale0.296296_{m}" / "summary.json"))
+    for col, probe, column in (("rms_front_vs_constant_m", "front", "front"), ("rms_kinetic_vs_constant_J", "fluid", "kinetic")):
+        t, v = series(m, probe, column)
+        tr, vr = series("constant", probe, column)
+        keep = tr <= t[-1] + 1e-12  # the reference's samples within the run
+        want = float(np.sqrt(np.mean((np.interp(tr[keep], t, v) - vr[keep]) ** 2)))
+        got = float(r[col])
+        if m == "constant" and got != 0.0: bad.append(f"constant {col} 0, found {got}")
+        if not math.isclose(got, want, rel_tol=1e-9, abs_tol=1e-15): bad.append(f"{m} {col} {want}, found {got}")
+    if m != "constant" and not float(r["rms_kinetic_vs_constant_J"]) > 0: bad.append(f"{m}: a kinetic-energy deviation > 0")
+    f = s["avg_active_fraction"]
+    if not math.isclose(float(r["evaluations_per_particle"]), s["steps"] * f, rel_tol=1e-9): bad.append(f"{m} evaluations")
+    if not math.isclose(float(r["speedup_times_active"]), float(r["speedup_vs_global"]) * f, rel_tol=1e-9): bad.append(f"{m} S x f")
+if "| S × f | RMS dev front (mm) | RMS dev kinetic energy (J) |" not in (d / "mode_table.md").read_text(): bad.append("mode_table.md's columns")
+for b in bad: print("  expected:", b)
+sys.exit(1 if bad else 0)
+EOF2
+check "mode_table: RMS deviations from the constant run, evaluations per particle and S x f as computed apart" '[ $rc -eq 0 ]'
 # --reuse takes a readable summary.json, but not one sph-run marked "interrupted" (nor the
 # truncated one): those two runs again, the others reused; every row complete now, exit 0.
 "$py" -c 'import json, sys
@@ -262,6 +295,19 @@ et=("$py" "$src/tools/mode_table.py" "$tmp/tank.json" --scales 0.296296 --end 0.
 "${et[@]}" --reuse >/dev/null 2>"$tmp/mte.err"; rc=$?
 check "mode_table --reuse, the scene file edited since: each run named and run again (got $rc)" \
   '[ $rc -eq 0 ] && [ "$(grep -c "^not reusing .*summary.json: another run.s (the scene file has changed since (its SHA-256 differs)); running it again$" "$tmp/mte.err")" -eq 2 ] && grep -q "\"viscosity\": 0.2" "$tmp/mte/scale0.296296_global/scene_as_run.json"'
+# --set applies to every configuration, an --extra's own value of the same key winning; --reuse
+# then takes every run (the key set twice is checked at its last value); a --set that is not
+# KEY=VALUE is refused before any run.
+st=("$py" "$src/tools/mode_table.py" "$src/scenes/hydrostatic_tank.json" --scales 0.296296 --end 0.02 --no-constant
+    --sph-run "$run" --out "$tmp/mts" --set simulation.stepping.lambda_c=0.7 --extra "lc:simulation.stepping.mode=global,simulation.stepping.lambda_c=0.5")
+"${st[@]}" >/dev/null 2>&1; rc=$?
+"${st[@]}" --reuse >/dev/null 2>"$tmp/mts.err"; rc2=$?
+lc() { "$py" -c 'import json, sys; print(json.load(open(sys.argv[1]))["simulation"]["stepping"]["lambda_c"])' "$tmp/mts/scale0.296296_$1/scene_as_run.json"; }
+check "mode_table --set: lambda_c 0.7 in global and individual, the extra's own 0.5 in lc ($(lc global) $(lc individual) $(lc lc)); --reuse takes all three (got $rc, $rc2)" \
+  '[ $rc -eq 0 ] && [ $rc2 -eq 0 ] && [ "$(lc global) $(lc individual) $(lc lc)" = "0.7 0.7 0.5" ] && [ "$(grep -c "^reusing " "$tmp/mts.err")" -eq 3 ]'
+"$py" "$src/tools/mode_table.py" "$src/scenes/hydrostatic_tank.json" --set lambda_c --out "$tmp/mt0" 2>"$tmp/mt0.err"; rc=$?
+check "mode_table --set lambda_c (no =): exit 2 before any run (got $rc)" \
+  '[ $rc -eq 2 ] && [ ! -e "$tmp/mt0" ] && grep -q "^mode_table.py: error: --set '"'lambda_c'"': not KEY=VALUE" "$tmp/mt0.err"'
 # Ctrl-C at a terminal (SIGINT to the tool's whole process group, which the fake sends during
 # the individual run): the run gets exactly one signal, the tool's SIGTERM, and saves its
 # summary marked "interrupted" by it; the tool dies by SIGINT, the table keeps the first two rows.

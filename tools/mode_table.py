@@ -4,7 +4,11 @@ at one or more sizes, run one after another (never in parallel) so the wall time
 
 usage: tools/mode_table.py SCENE.json [--scales 1,2] [--end T] [--threads 2] [--repeat 3]
                            [--sph-run build/tools/sph-run] [--out out/mode_table]
-                           [--extra NAME:KEY=VALUE,KEY=VALUE ...]
+                           [--set KEY=VALUE ...] [--extra NAME:KEY=VALUE,KEY=VALUE ...]
+
+--set KEY=VALUE (repeatable) applies to every configuration, before its own settings (e.g.
+--set simulation.stepping.lambda_c=0.9 to compare the modes at that acoustic coefficient; an
+--extra's own KEY=VALUE wins where both set one key).
 
 With --repeat K every configuration runs K times, interleaved round by round (global,
 individual, ..., then again), and the table gives the median wall and CPU time, so a burst
@@ -13,7 +17,12 @@ are deterministic (same steps and results each time); only the times vary.
 
 The `constant` run uses the smallest step the `global` run of the same size took (its
 `min_dt_s`), i.e. the largest fixed step known to be stable for the whole run, which is how
-a user without adaptivity would have to choose it. Each run's outputs (and its run.log) stay in
+a user without adaptivity would have to choose it. It is also the table's reference for
+accuracy: each configuration's RMS deviation from it of the scene's first `front` probe and of
+its kinetic energy (a `fluid` probe's), as sph-study computes a deviation (the run interpolated
+linearly to the reference's sample times; sph_study.deviation), from each configuration's
+first run (the runs are deterministic). S x f is the wall-time speed-up over `global` times the
+average active fraction: 1 when a particle evaluation costs what it costs in `global`. Each run's outputs (and its run.log) stay in
 --out/scale<S>_<name>/ (the name with spaces as `_` and brackets dropped: two --extra names that
 give the same folder are refused). Prints a Markdown table and writes mode_table.md and
 mode_table.csv into --out.
@@ -50,6 +59,7 @@ import sys
 import time
 from sph_python import Unreadable, csv_text, errors_as_exit_2, exit_if_unusable, file_sha256, log_tail, md_cell, \
     md_status_row, positive_list, read_json_object, read_run, require, sph_run, write_atomic  # noqa: E402 (tools/ is the script's folder)
+from sph_study import deviation, primary_series  # noqa: E402
 
 errors_as_exit_2()
 
@@ -67,6 +77,8 @@ ap.add_argument("--reuse", action="store_true",
                      "the same scene, end time, scale, threads and configuration (as the run recorded them) instead "
                      "of running it again (re-tabulates an earlier or interrupted table with the same options); "
                      "any other is run again, saying why")
+ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                help="a setting for every configuration, before its own (sph-run --set)")
 ap.add_argument("--extra", action="append", default=[],
                 help="an extra configuration NAME:KEY=VALUE[,KEY=VALUE...], e.g. 'individual(global λ):"
                      "simulation.stepping.mode=individual,simulation.stepping.lambda_v=0.1'")
@@ -98,6 +110,9 @@ def folder(name):
     return name.replace(' ', '_').replace('(', '').replace(')', '')
 
 
+for spec in args.set:  # refused before any run
+    key, eq, _ = spec.partition("=")
+    require(eq and key.strip(), f"--set {spec!r}: not KEY=VALUE (e.g. simulation.stepping.lambda_c=0.9)")
 EXTRAS = []
 folders = {folder(n): n for n in ("global", "constant", "individual")}
 for spec in args.extra:  # refused before any run
@@ -183,6 +198,8 @@ def mismatch(out, summary, scale, sets):
     end = args.end if args.end is not None else scene.get("simulation", {}).get("end_time")
     wanted = ([(["simulation", "end_time"], end)] if end is not None else []) + \
         [(["simulation", "scale"], scale)] + [override(s) for s in sets]
+    # A key set twice (--set, then the configuration's own) holds the last value, as sph-run applies them.
+    wanted = list({tuple(path): (path, value) for path, value in wanted}.values())
     why = []
     absent = object()
     for path, value in wanted:
@@ -217,6 +234,7 @@ def run(tag, scale, sets, rep=0):
             status = f"another run's ({other})"
         if not status:
             print(f"reusing {out / 'summary.json'}", file=sys.stderr, flush=True)
+            s["run_dir"] = str(out)
             return s, None
         print(f"not reusing {out / 'summary.json'}: {status}; running it again", file=sys.stderr, flush=True)
     print(f"[{time.strftime('%H:%M:%S')}] {' '.join(cmd)}", file=sys.stderr, flush=True)
@@ -229,11 +247,41 @@ def run(tag, scale, sets, rep=0):
             (out / "mode_table.json").write_text(json.dumps({"scene_sha256": before}) + "\n")
     if status:
         print(f"run {status}: {' '.join(cmd)}\n{log_tail(out)}", file=sys.stderr, flush=True)
+    else:
+        s["run_dir"] = str(out)
     return s, status
 
 
 def fronts(s):
     return [f["x"] for f in s.get("front_x_m_at", [])]
+
+
+def accuracy_series(s):
+    """{"front": (t, x, unit), "kinetic energy": (t, E, unit)} of a run (each only if the scene has
+    such a probe and the run wrote it), from its probes/ as sph-study reads them; a probe file that
+    cannot be parsed leaves its series out (the row's other figures stand)."""
+    probes = scene_json().get("probes", [])
+    fronts_ = [p for p in probes if p.get("type") == "front"][:1]
+    fluids = [p for p in probes if p.get("type") == "fluid"][:1]
+    out = {}
+    for key, probe in (("front", fronts_), ("kinetic energy", fluids)):
+        if not probe:
+            continue
+        try:
+            series = primary_series(s["run_dir"], probe)
+        except Unreadable:
+            continue
+        if series:
+            out[key] = next(iter(series.values()))
+    return out
+
+
+def rms_against(s, ref, key):
+    """The RMS deviation of series `key` of run s from the reference run's (nan if either lacks it)."""
+    if s is None or ref is None:
+        return float("nan")
+    a, b = accuracy_series(s).get(key), accuracy_series(ref).get(key)
+    return deviation(a, b)[0] if a is not None and b is not None else float("nan")
 
 
 def tabulate(sizes):
@@ -244,6 +292,7 @@ def tabulate(sizes):
         med = {name: (statistics.median(r["wall_time_s"] for r in rs), statistics.median(r.get("cpu_time_s", float("nan")) for r in rs))
                for name, rs in runs.items() if rs}
         g = runs["global"][0] if runs.get("global") else None
+        ref = runs["constant"][0] if runs.get("constant") else None
         per_step = {}
         for name, rs in runs.items():
             for r in rs:
@@ -278,6 +327,10 @@ def tabulate(sizes):
                 "speedup_vs_global_cpu": med["global"][1] / cpu if "global" in med else float("nan"),
                 "speedup_vs_constant": med["constant"][0] / wall if "constant" in med else float("nan"),
                 "status": status,
+                "evaluations_per_particle": s["steps"] * s["avg_active_fraction"],
+                "speedup_times_active": (med["global"][0] / wall if "global" in med else float("nan")) * s["avg_active_fraction"],
+                "rms_front_vs_constant_m": rms_against(s, ref, "front"),
+                "rms_kinetic_vs_constant_J": rms_against(s, ref, "kinetic energy"),
             })
         system_tables.append((scale, order, {sy: {n: statistics.median(v) for n, v in c.items()} for sy, c in per_step.items()}))
 
@@ -285,18 +338,26 @@ def tabulate(sizes):
     lines = [f"`{pathlib.Path(args.scene).name}`, {args.threads} threads, {machine}, "
              f"{time.strftime('%Y-%m-%d')}; runs one after another, no frames written; "
              f"{args.repeat} run(s) per configuration, interleaved, median times; front deviation is the largest "
-             f"|x - x_global| / x_global over the three times.", "",
+             f"|x - x_global| / x_global over the three times; S × f is the wall speed-up over `global` times the "
+             f"average active fraction; the RMS deviations are from the `constant` run's probes.", "",
              "| mode | particles | simulated s | wall s | CPU s | steps | avg Δt_sim ms (min–max) | avg active | "
-             "max ρ error | front x m at t s | front vs global | net catches | speed-up vs global: wall, CPU (wall vs constant) |",
-             "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+             "evaluations per particle | max ρ error | front x m at t s | front vs global | net catches | "
+             "speed-up vs global: wall, CPU (wall vs constant) | S × f | RMS dev front (mm) | RMS dev kinetic energy (J) |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+
+    def figure(x, form):
+        return "–" if math.isnan(x) else format(x, form)
     for r in rows:
         if not r["runs"]:
-            lines.append(md_status_row(r["mode"], r["status"], 13))
+            lines.append(md_status_row(r["mode"], r["status"], 17))
             continue
         lines.append(f"| {md_cell(r['mode'])} | {r['particles']:,} | {r['simulated_s']:.2f} | {r['wall_s']:.1f} | {r['cpu_s']:.1f} | {r['steps']:,} | "
                      f"{r['avg_dt_ms']:.3f} ({r['min_dt_ms']:.3f}–{r['max_dt_ms']:.3f}) | {r['avg_active_pct']:.0f} % | "
+                     f"{r['evaluations_per_particle']:,.0f} | "
                      f"{r['max_density_error_pct']:.1f} % | {r['front_x_m']} at {r['front_t_s']} | {r['front_dev_vs_global_pct']:.1f} % | {r['collisions']} | "
-                     f"{r['speedup_vs_global']:.2f}, {r['speedup_vs_global_cpu']:.2f} ({r['speedup_vs_constant']:.2f}) |")
+                     f"{r['speedup_vs_global']:.2f}, {r['speedup_vs_global_cpu']:.2f} ({r['speedup_vs_constant']:.2f}) | "
+                     f"{figure(r['speedup_times_active'], '.2f')} | {figure(1e3 * r['rms_front_vs_constant_m'], '.2f')} | "
+                     f"{figure(r['rms_kinetic_vs_constant_J'], '.3g')} |")
     if notes:
         lines += [""] + notes
     # Where a step's time goes: each system's wall time per step from summary.json (median over the
@@ -312,7 +373,8 @@ def tabulate(sizes):
 
 COLUMNS = ["scene", "mode", "particles", "simulated_s", "runs", "wall_s", "cpu_s", "steps", "avg_dt_ms", "min_dt_ms",
            "max_dt_ms", "avg_active_pct", "max_density_error_pct", "front_t_s", "front_x_m", "front_dev_vs_global_pct",
-           "collisions", "speedup_vs_global", "speedup_vs_global_cpu", "speedup_vs_constant", "status"]
+           "collisions", "speedup_vs_global", "speedup_vs_global_cpu", "speedup_vs_constant", "status",
+           "evaluations_per_particle", "speedup_times_active", "rms_front_vs_constant_m", "rms_kinetic_vs_constant_J"]
 
 
 def write_tables(sizes):
@@ -324,7 +386,7 @@ def write_tables(sizes):
 
 sizes = []
 for scale in SCALES:
-    configs = [("global", ["simulation.stepping.mode=global"])]
+    configs = [("global", args.set + ["simulation.stepping.mode=global"])]
     runs, problems, skipped = {}, {}, {}
     sizes.append((scale, configs, runs, problems, skipped))
 
@@ -341,12 +403,12 @@ for scale in SCALES:
     first = result[0]
     record("global", result)
     if not args.no_constant:
-        configs.append(("constant", ["simulation.stepping.mode=constant"] +
+        configs.append(("constant", args.set + ["simulation.stepping.mode=constant"] +
                         ([f"simulation.stepping.dt={first['min_dt_s']!r}"] if first else [])))
         if not first:
             skipped["constant"] = "skipped: its step is the first global run's smallest, and that run is not usable"
-    configs.append(("individual", ["simulation.stepping.mode=individual"]))
-    configs += EXTRAS
+    configs.append(("individual", args.set + ["simulation.stepping.mode=individual"]))
+    configs += [(name, args.set + sets) for name, sets in EXTRAS]
     for rep in range(args.repeat):
         for name, sets in configs:
             if (name == "global" and rep == 0) or name in skipped:
