@@ -261,10 +261,10 @@ def accuracy_series(s):
     such a probe and the run wrote it), from its probes/ as sph-study reads them; a probe file that
     cannot be parsed leaves its series out (the row's other figures stand)."""
     probes = scene_json().get("probes", [])
-    fronts_ = [p for p in probes if p.get("type") == "front"][:1]
-    fluids = [p for p in probes if p.get("type") == "fluid"][:1]
+    front = [p for p in probes if p.get("type") == "front"][:1]
+    fluid = [p for p in probes if p.get("type") == "fluid"][:1]
     out = {}
-    for key, probe in (("front", fronts_), ("kinetic energy", fluids)):
+    for key, probe in (("front", front), ("kinetic energy", fluid)):
         if not probe:
             continue
         try:
@@ -276,11 +276,10 @@ def accuracy_series(s):
     return out
 
 
-def rms_against(s, ref, key):
-    """The RMS deviation of series `key` of run s from the reference run's (nan if either lacks it)."""
-    if s is None or ref is None:
-        return float("nan")
-    a, b = accuracy_series(s).get(key), accuracy_series(ref).get(key)
+def rms_against(mine, ref, key):
+    """The RMS deviation of series `key` of a run's accuracy_series from the reference's (nan if
+    either lacks it)."""
+    a, b = mine.get(key), ref.get(key)
     return deviation(a, b)[0] if a is not None and b is not None else float("nan")
 
 
@@ -292,7 +291,7 @@ def tabulate(sizes):
         med = {name: (statistics.median(r["wall_time_s"] for r in rs), statistics.median(r.get("cpu_time_s", float("nan")) for r in rs))
                for name, rs in runs.items() if rs}
         g = runs["global"][0] if runs.get("global") else None
-        ref = runs["constant"][0] if runs.get("constant") else None
+        ref = accuracy_series(runs["constant"][0]) if runs.get("constant") else {}
         per_step = {}
         for name, rs in runs.items():
             for r in rs:
@@ -315,6 +314,7 @@ def tabulate(sizes):
             wall, cpu = med[name]
             gf, sf = (fronts(g) if g else []), fronts(s)
             dev = max((abs(a - b) / abs(b) for a, b in zip(sf, gf) if b), default=float("nan"))
+            mine = accuracy_series(s)  # each probe file read once per row
             rows.append({
                 "scene": s["scene"], "mode": name, "particles": s["fluid_particles"],
                 "simulated_s": s["simulated_time_s"], "runs": len(rs), "wall_s": wall, "cpu_s": cpu, "steps": s["steps"],
@@ -329,8 +329,8 @@ def tabulate(sizes):
                 "status": status,
                 "evaluations_per_particle": s["steps"] * s["avg_active_fraction"],
                 "speedup_times_active": (med["global"][0] / wall if "global" in med else float("nan")) * s["avg_active_fraction"],
-                "rms_front_vs_constant_m": rms_against(s, ref, "front"),
-                "rms_kinetic_vs_constant_J": rms_against(s, ref, "kinetic energy"),
+                "rms_front_vs_constant_m": rms_against(mine, ref, "front"),
+                "rms_kinetic_vs_constant_J": rms_against(mine, ref, "kinetic energy"),
             })
         system_tables.append((scale, order, {sy: {n: statistics.median(v) for n, v in c.items()} for sy, c in per_step.items()}))
 
