@@ -189,7 +189,7 @@ DensityForm density_form(const Scene& scene) {
 }
 
 double stable_lambda_c(const Scene& scene) {
-    return density_form(scene) == DensityForm::Continuity ? 0.7 : 0.9;
+    return density_form(scene) == DensityForm::Continuity ? 0.7 : 0.8;
 }
 
 Aabb default_domain(const Scene& scene, double h) {

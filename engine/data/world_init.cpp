@@ -285,7 +285,7 @@ void warn_unstable_lambda_c(const Scene& scene) {
     if (st.lambda_c <= edge) return;
     spdlog::warn("simulation.stepping.lambda_c = {:g} is above {:g}, the largest at which a {} density's pressure "
                  "field stays quiet when particles step at the acoustic bound (measured: a resting tank's kinetic "
-                 "energy grows 5-40x above it); particles that reach the bound will ring. Keep lambda_c at or below "
+                 "energy grows 3-40x above it); particles that reach the bound will ring. Keep lambda_c at or below "
                  "{:g} (docs/methods.md, \"The acoustic condition\")",
                  st.lambda_c, edge, to_string(density_form(scene)), edge);
 }

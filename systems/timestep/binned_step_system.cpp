@@ -1,5 +1,5 @@
-// Binned stepping: raw bins, the <= 4x neighbour limiter (Saitoh & Makino 2009), wake-up, and
-// the next due time (binned_step_system.hpp states the rules).
+// Binned stepping: raw bins, the neighbour limiter (at most kLimiterSpan = 2 bins, a 4x step;
+// Saitoh & Makino 2009), wake-up, and the next due time (binned_step_system.hpp states the rules).
 #include "systems/timestep/binned_step_system.hpp"
 
 #include <tbb/blocked_range.h>
@@ -165,6 +165,7 @@ void BinnedStepSystem::run(Context& ctx) {
     auto& stepped = ctx.write(res::stepped);
     stepped.clear();
     std::uint64_t woken_count = 0, passes = 0, visited = 0;
+    constexpr int span = kLimiterSpan;
     double raw_hi = 0;  // the longest Delta t_i^raw of the step
     if (!set.empty()) {
         // The stable step of this step: the shortest Delta t_i^raw evaluated (checked against
@@ -253,12 +254,12 @@ void BinnedStepSystem::run(Context& ctx) {
                 bin[i] = std::uint8_t(b);
                 if (dense) {
                     low = std::min(low, b);
-                    if (!fresh && b + 2 < hi_raw) lim.push_back(i);
+                    if (!fresh && b + span < hi_raw) lim.push_back(i);
                     continue;
                 }
-                const bool limited = b > lo + 2;
+                const bool limited = b > lo + span;
                 if (limited) lim.push_back(i);
-                if (!wake_by_cells && (limited || b + 2 < hi)) wak.push_back(i);
+                if (!wake_by_cells && (limited || b + span < hi)) wak.push_back(i);
             }
             for (int cur = lowest.load(std::memory_order_relaxed);
                  low < cur && !lowest.compare_exchange_weak(cur, low, std::memory_order_relaxed);) {
@@ -267,7 +268,7 @@ void BinnedStepSystem::run(Context& ctx) {
         // Every row due: each new bin lies in [lowest, hi_raw] (a bin is at most its raw one), so
         // when that span is at most 2 no pair can break the limiter's rule and there is nothing
         // to do (at lambda_c 0.8 on dam_break_obstacles, every such step: docs/results/benchmarks.md).
-        const bool by_cells = dense && fresh && hi_raw > lowest.load() + 2;
+        const bool by_cells = dense && fresh && hi_raw > lowest.load() + span;
         m_limit.clear();
         m_wake.clear();
         for (auto& v : limit_rows) m_limit.insert(m_limit.end(), v.begin(), v.end());
@@ -285,8 +286,10 @@ void BinnedStepSystem::run(Context& ctx) {
                         for (std::size_t k = r.begin(); k < r.end(); ++k) {
                             const Index i = m_limit[k];
                             int lo = std::atomic_ref<std::uint8_t>(bin[i]).load(std::memory_order_relaxed);
-                            for (Index j : lists.of(i))
-                                lo = std::min<int>(lo, std::atomic_ref<std::uint8_t>(bin[j]).load(std::memory_order_relaxed) + 2);
+                            for (Index j : lists.of(i)) {
+                                const int bj = std::atomic_ref<std::uint8_t>(bin[j]).load(std::memory_order_relaxed);
+                                lo = std::min(lo, bj + span);
+                            }
                             any |= atomic_lower(bin[i], std::uint8_t(lo));
                         }
                         return any;
@@ -311,7 +314,7 @@ void BinnedStepSystem::run(Context& ctx) {
                         const auto load = [&](Index r) {
                             return int(std::atomic_ref<std::uint8_t>(bin[r]).load(std::memory_order_relaxed));
                         };
-                        const int cap = load(i) + 2;
+                        const int cap = load(i) + span;
                         for (Index j : lists.of(i))
                             // An active j never exceeds cap (the limiter's fixed point), so
                             // the activity flag is read only for the rare candidates.
@@ -338,9 +341,9 @@ void BinnedStepSystem::run(Context& ctx) {
                     auto& out = lowered.local();
                     for (std::size_t k = r.begin(); k < r.end(); ++k) {
                         const Index j = m_limit[k];
-                        const int cap = std::atomic_ref<std::uint8_t>(bin[j]).load(std::memory_order_relaxed) + 2;
+                        const int cap = std::atomic_ref<std::uint8_t>(bin[j]).load(std::memory_order_relaxed) + span;
                         for (Index i : lists.of(j))
-                            if (atomic_lower(bin[i], std::uint8_t(cap)) && cap + 2 < hi_raw) out.push_back(i);
+                            if (atomic_lower(bin[i], std::uint8_t(cap)) && cap + span < hi_raw) out.push_back(i);
                     }
                 });
                 m_limit.clear();
@@ -355,17 +358,19 @@ void BinnedStepSystem::run(Context& ctx) {
             // pair ends within 2 bins (the bounds need not hold once bins fall: what falls pushes).
             block_bounds(grid, bin, 255, kMin, m_cell, m_block_tmp, m_block);
             rows_by_cell(
-                grid, m_block, [&](int low) { return hi_raw > low + 2; }, [&](Index i, int low) { return bin[i] > low + 2; },
-                m_pull);
+                grid, m_block, [&](int low) { return hi_raw > low + span; },
+                [&](Index i, int low) { return bin[i] > low + span; }, m_pull);
             tbb::enumerable_thread_specific<std::vector<Index>> lowered;
             tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m_pull.size(), kGrain), [&](const auto& r) {
                 auto& out = lowered.local();
                 for (std::size_t k = r.begin(); k < r.end(); ++k) {
                     const Index i = m_pull[k];
                     int low = std::atomic_ref<std::uint8_t>(bin[i]).load(std::memory_order_relaxed);
-                    for (Index j : lists.of(i))
-                        low = std::min<int>(low, std::atomic_ref<std::uint8_t>(bin[j]).load(std::memory_order_relaxed) + 2);
-                    if (atomic_lower(bin[i], std::uint8_t(low)) && low + 2 < hi_raw) out.push_back(i);
+                    for (Index j : lists.of(i)) {
+                        const int bj = std::atomic_ref<std::uint8_t>(bin[j]).load(std::memory_order_relaxed);
+                        low = std::min(low, bj + span);
+                    }
+                    if (atomic_lower(bin[i], std::uint8_t(low)) && low + span < hi_raw) out.push_back(i);
                 }
             });
             if (!m_pull.empty()) ++passes;
@@ -382,8 +387,8 @@ void BinnedStepSystem::run(Context& ctx) {
             for (;;) {
                 if (wake_by_cells)  // the only active rows with a neighbour the wake-up may lower
                     rows_by_cell(
-                        grid, m_block, [&](int high) { return lo + 2 < high; },
-                        [&](Index i, int high) { return active[i] && bin[i] + 2 < high; }, m_wake);
+                        grid, m_block, [&](int high) { return lo + span < high; },
+                        [&](Index i, int high) { return active[i] && bin[i] + span < high; }, m_wake);
                 if (!wake() || !limit()) break;
             }
         }

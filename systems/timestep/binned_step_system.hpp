@@ -44,6 +44,10 @@ public:
     BinnedStepSystem(double dt_min, double dt_max, double headroom = kHeadroom)
         : m_dt_min(dt_min), m_dt_max(dt_max), m_headroom(headroom) {}
     static constexpr double kHeadroom = 0.8;
+    /// The limiter's span in bins (rule 2): a step at most 2^kLimiterSpan times a neighbour's.
+    /// 1 (at most 2x) measured no more accurate than 2 on the stirred pool at 1.17 M particles
+    /// (docs/results/he_table1.md, "A tighter limiter").
+    static constexpr int kLimiterSpan = 2;
     /// On a step whose grid was built from every row, with at most this many cells a row, the rows
     /// the limiter pulls at (every row due) are found by grid cell (binned_step_system.cpp) ...
     static constexpr double kCellsPerRow = 8;

@@ -195,39 +195,47 @@ INSTANTIATE_TEST_SUITE_P(EveryMode, HydrostaticTank, ::testing::ValuesIn(modes()
 
 // The stable edge of the acoustic coefficient (stable_lambda_c, engine/data/scene.hpp): the tank at
 // rest in `global` with lambda_v = lambda_f = 1, so that the acoustic bound lambda_c h / (c_s + |v|)
-// alone sets every step (c_s dt / h = lambda_c at rest), for 1 s. The whole fluid's kinetic energy
-// (the scene's `fluid` probe, mean over 0.3-1 s, after the start's settling) at the edge and 0.1
-// above it, each against the same tank at the default lambda_c 0.4. Measured 2026-12-07 (AVX-512):
-// summation 0.049 J at 0.4, 0.046 J at 0.9 (0.94x), 0.77 J at 0.95 and 1.8 J at 1.0 (37x);
-// continuity 0.0021 J at 0.4, 0.0022 J at 0.7 (1.04x), 0.011 J at 0.8 (5.2x), 0.17 J at 0.9, and
-// at 1.0 the time step collapses at t = 0.07 s. Held: at the edge at most 1.5x the default's
-// (it is the default's settling, 0.94-1.04x), above it at least 3x (5.2x and 37x measured): a
-// change that moved the edge by 0.1 either way fails one of the two.
+// alone sets every step (c_s dt / h = lambda_c at rest). The whole fluid's kinetic energy (the
+// scene's `fluid` probe, mean after 0.3 s, past the start's settling) at the edge and 0.1 above it,
+// each against the same tank at the default lambda_c 0.4. The summation density runs at --scale 4
+// (18,000 particles) for 0.6 s: its edge is 0.9 at the default 4,500 particles but 0.8 from 9,000
+// up. Measured 2026-12-07 (AVX-512), mean over 0.3-0.6 s, against lambda_c 0.4: 9,000 particles
+// 0.97x at 0.8 and 3.3x at 0.9; 18,000 1.03x and 7.7x; 36,000 1.03x and 13x; 105,393 1.08x and
+// 25x. The continuity density runs at the default size for 1 s (0.0021 J at 0.4, 0.0022 J at 0.7
+// (1.04x), 0.011 J at 0.8 (5.2x); at 36,000 particles 0.99x at 0.7 and 5.7x at 0.8). Held: at the
+// edge at most 1.5x the default's (it is the default's settling, 0.97-1.08x), above it at least
+// 3x (5.2x and 7.7x here): a change that moved either edge by 0.1 fails one of the two.
 TEST(HydrostaticTankAcoustic, RingsAboveTheStableLambdaC) {
-    for (const char* density : {"summation", "continuity"}) {
+    struct Case {
+        const char* density;
+        double scale, end;
+    };
+    for (const Case c : {Case{"summation", 4.0, 0.6}, Case{"continuity", 1.0, 1.0}}) {
         const auto kinetic = [&](double lambda_c) {
             const Scene scene = load_scene(SPH_SOURCE_DIR "/scenes/hydrostatic_tank.json",
                                            {{"/simulation/stepping/mode", "global"},
                                             {"/simulation/stepping/lambda_v", 1.0},
                                             {"/simulation/stepping/lambda_f", 1.0},
                                             {"/simulation/stepping/lambda_c", lambda_c},
-                                            {"/simulation/end_time", 1.0},
+                                            {"/simulation/scale", c.scale},
+                                            {"/simulation/end_time", c.end},
                                             {"/simulation/frame_rate", 0},
-                                            {"/fluid/density", density}});
+                                            {"/fluid/density", c.density}});
             auto sim = make_simulation(scene);
             ProbeSet probes(scene.probes);
             probes.sample_due(sim->world());
             sim->run_until(scene.simulation.end_time, [&](const Simulation& s) { probes.sample_due(s.world()); });
             return mean_after(probes.series("fluid"), "kinetic", 0.3).mean;
         };
-        const Scene probe = load_scene(SPH_SOURCE_DIR "/scenes/hydrostatic_tank.json", {{"/fluid/density", density}});
+        const Scene probe = load_scene(SPH_SOURCE_DIR "/scenes/hydrostatic_tank.json", {{"/fluid/density", c.density}});
         const double edge = stable_lambda_c(probe);
         const double up = std::min(1.0, edge + 0.1);  // the loader accepts lambda_c up to 1
         const double at_default = kinetic(0.4), at_edge = kinetic(edge), above = kinetic(up);
-        std::printf("acoustic edge [%s]: kinetic energy 0.3-1 s at lambda_c 0.4 %.4g J, at %.2g (the edge) %.4g J "
-                    "(%.2fx), at %.2g %.4g J (%.1fx)\n",
-                    density, at_default, edge, at_edge, at_edge / at_default, up, above, above / at_default);
-        EXPECT_LE(at_edge, 1.5 * at_default) << density << ": the tank rings at the stable edge " << edge;
-        EXPECT_GE(above, 3.0 * at_default) << density << ": the tank is quiet 0.1 above the edge " << edge;
+        std::printf("acoustic edge [%s, scale %g]: kinetic energy 0.3-%g s at lambda_c 0.4 %.4g J, at %.2g (the edge) "
+                    "%.4g J (%.2fx), at %.2g %.4g J (%.1fx)\n",
+                    c.density, c.scale, c.end, at_default, edge, at_edge, at_edge / at_default, up, above,
+                    above / at_default);
+        EXPECT_LE(at_edge, 1.5 * at_default) << c.density << ": the tank rings at the stable edge " << edge;
+        EXPECT_GE(above, 3.0 * at_default) << c.density << ": the tank is quiet 0.1 above the edge " << edge;
     }
 }
