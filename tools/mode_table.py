@@ -7,7 +7,7 @@ usage: tools/mode_table.py SCENE.json [--scales 1,2] [--end T] [--threads 2] [--
                            [--set KEY=VALUE ...] [--extra NAME:KEY=VALUE,KEY=VALUE ...]
 
 --set KEY=VALUE (repeatable) applies to every configuration, before its own settings (e.g.
---set simulation.stepping.lambda_c=0.9 to compare the modes at that acoustic coefficient; an
+--set simulation.stepping.lambda_c=0.8 to compare the modes at that acoustic coefficient; an
 --extra's own KEY=VALUE wins where both set one key).
 
 With --repeat K every configuration runs K times, interleaved round by round (global,
@@ -112,7 +112,7 @@ def folder(name):
 
 for spec in args.set:  # refused before any run
     key, eq, _ = spec.partition("=")
-    require(eq and key.strip(), f"--set {spec!r}: not KEY=VALUE (e.g. simulation.stepping.lambda_c=0.9)")
+    require(eq and key.strip(), f"--set {spec!r}: not KEY=VALUE (e.g. simulation.stepping.lambda_c=0.8)")
 EXTRAS = []
 folders = {folder(n): n for n in ("global", "constant", "individual")}
 for spec in args.extra:  # refused before any run
