@@ -415,7 +415,7 @@ inline bool method_takes_support(Method method, double support) {
 /// continuity density (delta-SPH). Measured on hydrostatic_tank with the bound alone setting the
 /// step, from 4,500 to 105,000 particles: above these the resting water's kinetic energy grows
 /// 3-25x and at lambda_c 1.0 the continuity run collapses (docs/results/he_table1.md, "lambda_c
-/// above the stable edge"). The summation density's edge is 0.9 at 4,500 particles only; from
+/// 0.8, the stable edge" and "lambda_c above the stable edge"). The summation density's edge is 0.9 at 4,500 particles only; from
 /// 8,100 it is 0.8. Symplectic Euler is stable for omega dt < 2 on each mode; these are where
 /// the fastest acoustic mode of the discrete fluid crosses it. The loader accepts up to 1.0 and
 /// initialise_world warns above this value.
